@@ -1,0 +1,98 @@
+//! Bounding volume hierarchy over triangles.
+//!
+//! A binary BVH built top-down with the binned surface area heuristic, stored
+//! as a flat array with siblings adjacent. The BVH keeps its own copy of the
+//! triangles in leaf order, so a leaf's triangles are contiguous in memory;
+//! hits report the caller's original triangle index.
+
+mod build;
+mod traverse;
+
+pub use build::BuildOptions;
+
+use crate::geometry::{Aabb, Triangle};
+
+#[derive(Clone, Copy, Debug)]
+pub struct Node {
+    pub bounds: Aabb,
+    /// Inner node: index of the first of its two adjacent children.
+    /// Leaf: index of its first triangle in leaf order.
+    pub first: u32,
+    /// Number of triangles; zero marks an inner node.
+    pub count: u32,
+}
+
+impl Node {
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+}
+
+/// A closest hit: the caller's triangle index, distance and barycentrics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub triangle: u32,
+    pub t: f32,
+    pub b1: f32,
+    pub b2: f32,
+}
+
+pub struct Bvh {
+    nodes: Vec<Node>,
+    /// Triangles in leaf order.
+    triangles: Vec<Triangle>,
+    /// Leaf order → the caller's triangle index.
+    original_index: Vec<u32>,
+}
+
+/// Traversal and intersection costs the SAH weighs, relative to each other.
+pub const TRAVERSAL_COST: f32 = 1.0;
+pub const INTERSECTION_COST: f32 = 1.0;
+
+impl Bvh {
+    pub fn build(triangles: &[Triangle]) -> Bvh {
+        Bvh::build_with(triangles, &BuildOptions::default())
+    }
+
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds)
+    }
+
+    /// Expected cost of a random ray under the SAH, in units of one triangle test.
+    pub fn sah_cost(&self) -> f32 {
+        let root_area = self.bounds().surface_area();
+        if root_area <= 0.0 {
+            return 0.0;
+        }
+        let total: f32 = self
+            .nodes
+            .iter()
+            .map(|n| {
+                let cost = if n.is_leaf() {
+                    n.count as f32 * INTERSECTION_COST
+                } else {
+                    TRAVERSAL_COST
+                };
+                n.bounds.surface_area() * cost
+            })
+            .sum();
+        total / root_area
+    }
+
+    pub fn leaf_count(&self) -> usize {
+        self.nodes.iter().filter(|n| n.is_leaf()).count()
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>()
+            + self.triangles.len() * (std::mem::size_of::<Triangle>() + 4)
+    }
+}

@@ -1,0 +1,235 @@
+//! The command line: `tracer render` and `tracer info`.
+
+use crate::film::write::{write_image, ImageFormat};
+use crate::light::Light;
+use crate::render::{render, RenderOptions};
+use crate::scene::desc::{Display, IntegratorKind};
+use crate::scene::{self, Scene};
+use crate::{Error, Result};
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "tracer",
+    version,
+    about = "A physically based offline renderer"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene (.json, or a T-racer .trs) to an image.
+    Render(RenderArgs),
+    /// Describe a scene: triangles, lights, materials, bounds and BVH.
+    Info {
+        /// The scene file.
+        scene: PathBuf,
+    },
+}
+
+/// Flags override the scene's `film` and `render` blocks.
+#[derive(Args, Debug, Default)]
+pub struct RenderArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Output image; the format follows the extension (.exr, .pfm, .png, .tga).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorKind>,
+    /// Samples per pixel.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Stop after the pass in progress once this many seconds have passed.
+    #[arg(long, value_parser = positive_seconds)]
+    pub time_limit: Option<f32>,
+    /// Maximum number of path segments.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_depth: Option<u32>,
+    /// The image is a pure function of scene, settings and seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..1025))]
+    pub threads: Option<u32>,
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..65537))]
+    pub width: Option<u32>,
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..65537))]
+    pub height: Option<u32>,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+fn positive_seconds(s: &str) -> std::result::Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!(
+            "expected a positive number of seconds, found {s:?}"
+        )),
+    }
+}
+
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Render(args) => run_render(&args),
+        Command::Info { scene } => run_info(&scene),
+    }
+}
+
+/// Loads the scene and applies the command-line overrides.
+pub fn prepare(args: &RenderArgs) -> Result<Scene> {
+    let mut scene = scene::load(&args.scene)?;
+    let s = &mut scene.settings;
+    if let Some(o) = &args.output {
+        s.output = o.clone();
+    }
+    if let Some(i) = args.integrator {
+        s.integrator = i;
+    }
+    if let Some(n) = args.spp {
+        s.spp = n;
+    }
+    if let Some(t) = args.time_limit {
+        s.time_limit = Some(t);
+    }
+    if let Some(d) = args.max_depth {
+        s.max_depth = d;
+    }
+    if let Some(seed) = args.seed {
+        s.seed = seed;
+    }
+    if args.width.is_some() || args.height.is_some() {
+        let (w, h) = (
+            args.width.unwrap_or(s.width),
+            args.height.unwrap_or(s.height),
+        );
+        scene.set_resolution(w, h);
+    }
+    if ImageFormat::from_path(&scene.settings.output).is_none() {
+        return Err(Error::Image {
+            path: scene.settings.output.clone(),
+            message: "unknown image format: use .exr, .pfm, .png or .tga".into(),
+        });
+    }
+    Ok(scene)
+}
+
+fn run_render(args: &RenderArgs) -> Result<()> {
+    let start = Instant::now();
+    let scene = prepare(args)?;
+    for w in &scene.report.warnings {
+        eprintln!("warning: {w}");
+    }
+    if scene.report.degenerate_triangles_dropped > 0 {
+        eprintln!(
+            "note: dropped {} degenerate (zero-area) triangles",
+            scene.report.degenerate_triangles_dropped
+        );
+    }
+    if scene.display == Some(Display::Window) {
+        eprintln!(
+            "note: this T-racer scene asks for a preview window, which this build does not have; writing {}",
+            scene.settings.output.display()
+        );
+    }
+    eprintln!(
+        "loaded {} ({} triangles, {} lights) in {:.2} s, BVH built in {:.3} s",
+        args.scene.display(),
+        scene.triangles.len(),
+        scene.lights.len(),
+        start.elapsed().as_secs_f64(),
+        scene.report.bvh_build_seconds
+    );
+    let options = RenderOptions {
+        threads: args.threads.map(|t| t as usize),
+        progress: !args.quiet,
+    };
+    let (image, stats) = render(&scene, &options)?;
+    let s = &scene.settings;
+    write_image(&s.output, &image, s.tonemap, s.exposure)?;
+    eprintln!(
+        "wrote {}: {}x{}, {} spp, {:.2} s, {:.2} M samples/s",
+        s.output.display(),
+        s.width,
+        s.height,
+        stats.spp,
+        stats.seconds,
+        stats.samples_per_second() / 1e6
+    );
+    if stats.discarded > 0 {
+        eprintln!(
+            "warning: {} of {} samples were NaN or infinite and were discarded",
+            stats.discarded, stats.samples
+        );
+    }
+    Ok(())
+}
+
+fn run_info(path: &std::path::Path) -> Result<()> {
+    let scene = scene::load(path)?;
+    let count = |f: fn(&Light) -> bool| scene.lights.iter().filter(|l| f(l)).count();
+    println!("scene:      {} ({})", scene.name, path.display());
+    println!("triangles:  {}", scene.triangles.len());
+    if scene.report.degenerate_triangles_dropped > 0 {
+        println!(
+            "dropped:    {} degenerate triangles",
+            scene.report.degenerate_triangles_dropped
+        );
+    }
+    println!(
+        "lights:     {} (area triangles {}, point {}, spot {}, directional {})",
+        scene.lights.len(),
+        count(|l| matches!(l, Light::Area(_))),
+        count(|l| matches!(l, Light::Point(_))),
+        count(|l| matches!(l, Light::Spot(_))),
+        count(|l| matches!(l, Light::Directional(_))),
+    );
+    println!(
+        "materials:  {} ({})",
+        scene.materials.len(),
+        scene.material_names.join(", ")
+    );
+    let b = scene.bounds;
+    if b.is_empty() {
+        println!("bounds:     empty");
+    } else {
+        println!(
+            "bounds:     ({:.4}, {:.4}, {:.4}) .. ({:.4}, {:.4}, {:.4})",
+            b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+        );
+    }
+    println!(
+        "bvh:        {} nodes, {} leaves, SAH cost {:.2}, {} bytes, built in {:.3} s",
+        scene.bvh.nodes().len(),
+        scene.bvh.leaf_count(),
+        scene.bvh.sah_cost(),
+        scene.bvh.memory_bytes(),
+        scene.report.bvh_build_seconds
+    );
+    let s = &scene.settings;
+    let integrator = match s.integrator {
+        IntegratorKind::Pt => "pt",
+        IntegratorKind::Lt => "lt",
+        IntegratorKind::Bdpt => "bdpt",
+    };
+    println!(
+        "render:     {}x{}, {} spp, {}, max depth {}, seed {} -> {}",
+        s.width,
+        s.height,
+        s.spp,
+        integrator,
+        s.max_depth,
+        s.seed,
+        s.output.display()
+    );
+    for w in &scene.report.warnings {
+        println!("warning:    {w}");
+    }
+    Ok(())
+}

@@ -1,0 +1,41 @@
+//! The image: linear radiance per pixel, tone mapping, and the writers.
+
+pub mod tonemap;
+pub mod write;
+
+use crate::color::Rgb;
+
+/// A linear RGB image, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<Rgb>,
+}
+
+impl Image {
+    pub fn new(width: u32, height: u32) -> Image {
+        Image {
+            width,
+            height,
+            pixels: vec![Rgb::ZERO; width as usize * height as usize],
+        }
+    }
+
+    pub fn get(&self, x: u32, y: u32) -> Rgb {
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+
+    pub fn set(&mut self, x: u32, y: u32, c: Rgb) {
+        self.pixels[y as usize * self.width as usize + x as usize] = c;
+    }
+
+    /// Mean over all pixels, in double precision.
+    pub fn mean(&self) -> Rgb {
+        let sum = self
+            .pixels
+            .iter()
+            .fold(glam::DVec3::ZERO, |acc, p| acc + p.as_dvec3());
+        (sum / self.pixels.len().max(1) as f64).as_vec3()
+    }
+}

@@ -1,0 +1,173 @@
+//! Image writers. The format follows the extension: `.exr` and `.pfm` are
+//! written linear; `.png` and `.tga` are tone mapped to 8 bits.
+//!
+//! Every file is encoded in memory, written to a temporary file beside the
+//! target, flushed to disk and renamed into place: an interrupted or failed
+//! write never leaves a broken image, nor destroys the previous one.
+
+use super::tonemap::to_8bit;
+use super::Image;
+use crate::scene::desc::Tonemap;
+use crate::{Error, Result};
+use std::io::{Cursor, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    Exr,
+    Pfm,
+    Png,
+    Tga,
+}
+
+impl ImageFormat {
+    pub fn from_path(path: &Path) -> Option<ImageFormat> {
+        let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "exr" => ImageFormat::Exr,
+            "pfm" => ImageFormat::Pfm,
+            "png" => ImageFormat::Png,
+            "tga" => ImageFormat::Tga,
+            _ => return None,
+        })
+    }
+}
+
+/// Writes `image` to `path` in the format its extension names.
+pub fn write_image(path: &Path, image: &Image, tonemap: Tonemap, exposure: f32) -> Result<()> {
+    let format = ImageFormat::from_path(path).ok_or_else(|| Error::Image {
+        path: path.to_path_buf(),
+        message: "unknown image format: use .exr, .pfm, .png or .tga".into(),
+    })?;
+    let bytes = encode(image, format, tonemap, exposure).map_err(|message| Error::Image {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    write_atomic(path, &bytes)
+}
+
+pub fn encode(
+    image: &Image,
+    format: ImageFormat,
+    tonemap: Tonemap,
+    exposure: f32,
+) -> std::result::Result<Vec<u8>, String> {
+    match format {
+        ImageFormat::Exr => encode_exr(image),
+        ImageFormat::Pfm => Ok(encode_pfm(image)),
+        ImageFormat::Png | ImageFormat::Tga => {
+            let rgb: Vec<u8> = image
+                .pixels
+                .iter()
+                .flat_map(|&c| to_8bit(c, tonemap, exposure))
+                .collect();
+            let buffer =
+                image::RgbImage::from_raw(image.width, image.height, rgb).expect("size matches");
+            let mut out = Cursor::new(Vec::new());
+            let f = if format == ImageFormat::Png {
+                image::ImageFormat::Png
+            } else {
+                image::ImageFormat::Tga
+            };
+            buffer.write_to(&mut out, f).map_err(|e| e.to_string())?;
+            Ok(out.into_inner())
+        }
+    }
+}
+
+fn encode_exr(image: &Image) -> std::result::Result<Vec<u8>, String> {
+    use exr::prelude::*;
+    let w = image.width as usize;
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let c = image.pixels[p.y() * w + p.x()];
+        (c.x, c.y, c.z)
+    });
+    let exr_image = exr::prelude::Image::from_channels((w, image.height as usize), channels);
+    let mut out = Cursor::new(Vec::new());
+    exr_image
+        .write()
+        .to_buffered(&mut out)
+        .map_err(|e| e.to_string())?;
+    Ok(out.into_inner())
+}
+
+/// Portable float map: a text header, then little-endian RGB floats, bottom row first.
+fn encode_pfm(image: &Image) -> Vec<u8> {
+    let mut out = format!("PF\n{} {}\n-1.0\n", image.width, image.height).into_bytes();
+    out.reserve(image.pixels.len() * 12);
+    for y in (0..image.height).rev() {
+        for x in 0..image.width {
+            for v in image.get(x, y).to_array() {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    out
+}
+
+/// Writes `bytes` to `path` through a temporary file and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    let temp = folder.join(format!(
+        ".{name}.{}-{}.tmp",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| {
+        let mut file = std::fs::File::create(&temp)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        std::fs::rename(&temp, path)
+    })();
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(&temp);
+        Error::io(path, e)
+    })
+}
+
+/// Reads a PFM written by [`write_image`] (or any RGB little-endian PFM).
+pub fn read_pfm(path: &Path) -> Result<Image> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bad = |m: &str| Error::Image {
+        path: path.to_path_buf(),
+        message: m.to_string(),
+    };
+    let mut fields = Vec::new();
+    let mut start = 0;
+    let mut i = 0;
+    while fields.len() < 4 && i < bytes.len() {
+        if bytes[i].is_ascii_whitespace() {
+            if i > start {
+                fields.push(String::from_utf8_lossy(&bytes[start..i]).into_owned());
+            }
+            start = i + 1;
+        }
+        i += 1;
+    }
+    if fields.len() < 4 || fields[0] != "PF" {
+        return Err(bad("not an RGB PFM file"));
+    }
+    let w: u32 = fields[1].parse().map_err(|_| bad("bad width"))?;
+    let h: u32 = fields[2].parse().map_err(|_| bad("bad height"))?;
+    let scale: f32 = fields[3].parse().map_err(|_| bad("bad scale"))?;
+    if scale >= 0.0 {
+        return Err(bad("big-endian PFM is not supported"));
+    }
+    let data = &bytes[start..];
+    if data.len() != w as usize * h as usize * 12 {
+        return Err(bad("pixel data has the wrong length"));
+    }
+    let mut image = Image::new(w, h);
+    for (k, c) in data.chunks_exact(12).enumerate() {
+        let f = |o: usize| f32::from_le_bytes(c[o..o + 4].try_into().unwrap());
+        let (x, y) = (k as u32 % w, h - 1 - k as u32 / w);
+        image.set(x, y, glam::Vec3::new(f(0), f(4), f(8)));
+    }
+    Ok(image)
+}

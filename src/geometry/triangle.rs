@@ -1,0 +1,143 @@
+//! The ray–triangle test.
+//!
+//! Watertight: a ray through a shared edge or vertex hits at least one of the
+//! triangles that share it, following Woop, Benthin and Wald, "Watertight
+//! Ray/Triangle Intersection" (JCGT 2013). The ray is sheared so it points
+//! along +z; the edge functions are then 2D and evaluated in double precision
+//! whenever single precision returns exactly zero.
+
+use glam::{DVec3, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub v: [Vec3; 3],
+}
+
+/// A hit: distance along the ray and the barycentric weights of vertices 1 and 2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    pub t: f32,
+    pub b1: f32,
+    pub b2: f32,
+}
+
+impl Triangle {
+    pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Triangle {
+        Triangle { v: [a, b, c] }
+    }
+
+    /// Unnormalised geometric normal, by counter-clockwise winding.
+    pub fn cross(&self) -> Vec3 {
+        (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0])
+    }
+
+    pub fn area(&self) -> f32 {
+        0.5 * self.cross().length()
+    }
+
+    /// Unit geometric normal; zero for a degenerate triangle.
+    pub fn normal(&self) -> Vec3 {
+        self.cross().normalize_or_zero()
+    }
+
+    pub fn point(&self, b1: f32, b2: f32) -> Vec3 {
+        (1.0 - b1 - b2) * self.v[0] + b1 * self.v[1] + b2 * self.v[2]
+    }
+}
+
+/// What the watertight test precomputes once per ray.
+#[derive(Clone, Copy, Debug)]
+pub struct RayShear {
+    origin: Vec3,
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    sx: f32,
+    sy: f32,
+    sz: f32,
+}
+
+impl RayShear {
+    pub fn new(origin: Vec3, dir: Vec3) -> RayShear {
+        let a = dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        // Keep the winding of the projected triangle: swap when looking down −z.
+        if dir[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        RayShear {
+            origin,
+            kx,
+            ky,
+            kz,
+            sx: dir[kx] / dir[kz],
+            sy: dir[ky] / dir[kz],
+            sz: 1.0 / dir[kz],
+        }
+    }
+
+    /// The hit with `tmin < t < tmax`, if any. Hits either face.
+    #[inline]
+    pub fn intersect(&self, tri: &Triangle, tmin: f32, tmax: f32) -> Option<TriangleHit> {
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let a = tri.v[0] - self.origin;
+        let b = tri.v[1] - self.origin;
+        let c = tri.v[2] - self.origin;
+        let ax = a[kx] - self.sx * a[kz];
+        let ay = a[ky] - self.sy * a[kz];
+        let bx = b[kx] - self.sx * b[kz];
+        let by = b[ky] - self.sy * b[kz];
+        let cx = c[kx] - self.sx * c[kz];
+        let cy = c[ky] - self.sy * c[kz];
+
+        let mut u = cx * by - cy * bx;
+        let mut v = ax * cy - ay * cx;
+        let mut w = bx * ay - by * ax;
+        if u == 0.0 || v == 0.0 || w == 0.0 {
+            // An edge passes (nearly) through the ray: decide exactly.
+            let d =
+                |p: f32, q: f32, r: f32, s: f32| (p as f64 * q as f64 - r as f64 * s as f64) as f32;
+            u = d(cx, by, cy, bx);
+            v = d(ax, cy, ay, cx);
+            w = d(bx, ay, by, ax);
+        }
+        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+            return None;
+        }
+        let det = u + v + w;
+        if det == 0.0 {
+            return None;
+        }
+        let az = self.sz * a[kz];
+        let bz = self.sz * b[kz];
+        let cz = self.sz * c[kz];
+        let t_scaled = u * az + v * bz + w * cz;
+        let inv_det = 1.0 / det;
+        let t = t_scaled * inv_det;
+        if !(t > tmin && t < tmax) {
+            return None;
+        }
+        Some(TriangleHit {
+            t,
+            b1: v * inv_det,
+            b2: w * inv_det,
+        })
+    }
+}
+
+/// Barycentric interpolation in double precision, for hit points that must sit
+/// on the triangle as exactly as floats allow.
+pub fn interpolate_precise(tri: &Triangle, b1: f32, b2: f32) -> Vec3 {
+    let (b1, b2) = (b1 as f64, b2 as f64);
+    let p =
+        (1.0 - b1 - b2) * tri.v[0].as_dvec3() + b1 * tri.v[1].as_dvec3() + b2 * tri.v[2].as_dvec3();
+    DVec3::as_vec3(p)
+}

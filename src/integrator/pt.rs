@@ -1,0 +1,141 @@
+//! Unidirectional path tracing with next-event estimation.
+//!
+//! At every non-delta vertex the path samples a light (chosen by power) and
+//! the BSDF; the two estimates of direct light are combined by the power
+//! heuristic. A BSDF-sampled ray that hits an emitter is weighted against the
+//! light-sampling density it would have had; after a delta bounce (mirror,
+//! glass) it counts in full, since light sampling could not produce it.
+//!
+//! `max_depth` counts path segments: the camera ray is segment 1, so direct
+//! light needs 2. Russian roulette on the throughput ends long paths without
+//! bias.
+
+use super::mis::power_heuristic;
+use super::ROULETTE_START;
+use crate::color::{is_black, Rgb};
+use crate::geometry::ray::offset_origin;
+use crate::geometry::Ray;
+use crate::light::{IncidentSample, Light};
+use crate::material::{Bsdf, SurfacePoint, Transport};
+use crate::sampling::Sampler;
+use crate::scene::{Scene, NO_LIGHT};
+
+/// Radiance arriving at the camera along `ray`.
+pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u32) -> Rgb {
+    let mut result = Rgb::ZERO;
+    let mut throughput = Rgb::ONE;
+    // What the previous vertex knew, to weigh an emitter hit by BSDF sampling.
+    let mut previous_pdf = 0.0f32;
+    let mut previous_delta = true;
+    let mut previous_position = ray.origin;
+    let mut segments = 0;
+
+    loop {
+        sampler.start_vertex();
+        let Some(hit) = scene.intersect(&ray) else {
+            break;
+        };
+        segments += 1;
+        let surface = scene.surface(&hit);
+        let wo = -ray.dir;
+        let shading = scene.shading[hit.triangle as usize];
+
+        if shading.light != NO_LIGHT {
+            if let Light::Area(light) = &scene.lights[shading.light as usize] {
+                let emitted = light.emitted(wo);
+                if !is_black(emitted) {
+                    let weight = if previous_delta {
+                        1.0
+                    } else {
+                        let light_pdf = scene.light_selector.pmf(shading.light as usize)
+                            * light.pdf_incident(previous_position, surface.position);
+                        power_heuristic(previous_pdf, light_pdf)
+                    };
+                    result += throughput * emitted * weight;
+                }
+            }
+        }
+        if segments >= max_depth {
+            break;
+        }
+
+        let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
+        if !bsdf.is_delta() {
+            result += throughput * direct_light(scene, &surface, &bsdf, wo, sampler);
+        }
+
+        let u = sampler.next_2d();
+        let u_lobe = sampler.next_1d();
+        let Some(s) = bsdf.sample(wo, u, u_lobe, Transport::Radiance) else {
+            break;
+        };
+        throughput *= s.weight;
+        previous_pdf = s.pdf;
+        previous_delta = s.delta;
+        previous_position = surface.position;
+        ray = Ray::new(
+            offset_origin(surface.position, surface.geometric_normal, s.wi),
+            s.wi,
+        );
+
+        if segments >= ROULETTE_START {
+            let survive = throughput.max_element().min(1.0);
+            if !(sampler.next_1d() < survive) {
+                break;
+            }
+            throughput /= survive;
+        }
+    }
+    result
+}
+
+/// One light sample at a non-delta surface, MIS-weighted against BSDF sampling.
+fn direct_light(
+    scene: &Scene,
+    surface: &SurfacePoint,
+    bsdf: &Bsdf,
+    wo: glam::Vec3,
+    sampler: &mut Sampler,
+) -> Rgb {
+    let u_select = sampler.next_1d();
+    let u_point = sampler.next_2d();
+    let Some((index, pick)) = scene.light_selector.sample(u_select) else {
+        return Rgb::ZERO;
+    };
+    let Some(sample) = scene.lights[index].sample_incident(surface.position, u_point) else {
+        return Rgb::ZERO;
+    };
+    let f = bsdf.eval(wo, sample.wi);
+    if is_black(f) || !unoccluded(scene, surface, &sample) {
+        return Rgb::ZERO;
+    }
+    let light_pdf = pick * sample.pdf;
+    let weight = if sample.delta {
+        1.0
+    } else {
+        power_heuristic(light_pdf, bsdf.pdf(wo, sample.wi))
+    };
+    f * sample.value * (weight / light_pdf)
+}
+
+/// Whether nothing blocks the segment from `surface` to the light sample.
+/// Both ends are moved off their surfaces, so neither can block itself.
+pub fn unoccluded(scene: &Scene, surface: &SurfacePoint, sample: &IncidentSample) -> bool {
+    let origin = offset_origin(surface.position, surface.geometric_normal, sample.wi);
+    let ray = if sample.distance.is_infinite() {
+        Ray::new(origin, sample.wi)
+    } else {
+        let target = if sample.normal == glam::Vec3::ZERO {
+            sample.point
+        } else {
+            offset_origin(sample.point, sample.normal, -sample.wi)
+        };
+        let to_target = target - origin;
+        let distance = to_target.length();
+        if !(distance > 0.0) {
+            return true;
+        }
+        Ray::segment(origin, to_target / distance, distance)
+    };
+    !scene.occluded(&ray)
+}

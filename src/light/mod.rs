@@ -1,0 +1,74 @@
+//! Light sources. Point, spot and directional lights are deltas (they cannot
+//! be hit by a ray); area lights are emissive triangles of the scene.
+//!
+//! Each light can be sampled from a receiving point ([`Light::sample_incident`])
+//! and reports its emitted power, which drives light selection ([`LightSelector`]).
+
+mod area;
+mod directional;
+mod point;
+mod selection;
+mod spot;
+
+pub use area::AreaLight;
+pub use directional::DirectionalLight;
+pub use point::PointLight;
+pub use selection::LightSelector;
+pub use spot::SpotLight;
+
+use crate::color::Rgb;
+use glam::Vec3;
+
+#[derive(Clone, Debug)]
+pub enum Light {
+    Point(PointLight),
+    Spot(SpotLight),
+    Directional(DirectionalLight),
+    Area(AreaLight),
+}
+
+/// Light arriving at a receiving point from a sampled point on a light.
+#[derive(Clone, Copy, Debug)]
+pub struct IncidentSample {
+    /// Unit direction from the receiver towards the light.
+    pub wi: Vec3,
+    /// Distance to the light point; infinite for directional lights.
+    pub distance: f32,
+    /// The sampled point on the light (for shadow rays).
+    pub point: Vec3,
+    /// The light's surface normal there; zero for lights that are not surfaces.
+    pub normal: Vec3,
+    /// Radiance for area lights; for delta lights, the irradiance a surface
+    /// facing the light receives (I / d² or E), so that in every case the
+    /// contribution is `f · cos · value / pdf`.
+    pub value: Rgb,
+    /// Solid-angle density of this sample; 1 for delta lights.
+    pub pdf: f32,
+    pub delta: bool,
+}
+
+impl Light {
+    pub fn is_delta(&self) -> bool {
+        !matches!(self, Light::Area(_))
+    }
+
+    /// Total emitted power (flux), averaged over RGB.
+    pub fn power(&self) -> f32 {
+        match self {
+            Light::Point(l) => l.power(),
+            Light::Spot(l) => l.power(),
+            Light::Directional(l) => l.power(),
+            Light::Area(l) => l.power(),
+        }
+    }
+
+    /// Samples light arriving at `receiver`; `None` when this light cannot reach it.
+    pub fn sample_incident(&self, receiver: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
+        match self {
+            Light::Point(l) => l.sample_incident(receiver),
+            Light::Spot(l) => l.sample_incident(receiver),
+            Light::Directional(l) => Some(l.sample_incident(receiver)),
+            Light::Area(l) => l.sample_incident(receiver, u),
+        }
+    }
+}

@@ -1,0 +1,102 @@
+//! Spot light: a point light whose intensity falls off away from its axis.
+//! At angle θ from the axis the intensity is
+//! `intensity × smoothstep(cos cone_angle, cos falloff_start, cos θ)`.
+
+use super::IncidentSample;
+use crate::color::{average, Rgb};
+use glam::Vec3;
+use std::f32::consts::PI;
+
+#[derive(Clone, Debug)]
+pub struct SpotLight {
+    pub position: Vec3,
+    /// Unit axis direction.
+    pub axis: Vec3,
+    pub intensity: Rgb,
+    /// Cosine of the angle from the axis to the cone's edge.
+    pub cos_cone: f32,
+    /// Cosine of the angle where the falloff begins (>= `cos_cone`).
+    pub cos_falloff_start: f32,
+}
+
+impl SpotLight {
+    /// The fraction of the axial intensity emitted at `cos_theta` from the axis.
+    pub fn falloff(&self, cos_theta: f32) -> f32 {
+        let (e0, e1) = (self.cos_cone, self.cos_falloff_start);
+        if cos_theta < e0 {
+            return 0.0;
+        }
+        if cos_theta >= e1 {
+            return 1.0;
+        }
+        let x = ((cos_theta - e0) / (e1 - e0)).clamp(0.0, 1.0);
+        x * x * (3.0 - 2.0 * x)
+    }
+
+    /// Exact flux: 2π ∫ falloff(cos θ) d(cos θ), which for the smoothstep ramp
+    /// is the full-intensity cap plus half the ramp's width in cos θ.
+    pub fn power(&self) -> f32 {
+        let full = 1.0 - self.cos_falloff_start;
+        let ramp = 0.5 * (self.cos_falloff_start - self.cos_cone);
+        2.0 * PI * average(self.intensity) * (full + ramp)
+    }
+
+    pub fn sample_incident(&self, receiver: Vec3) -> Option<IncidentSample> {
+        let to_light = self.position - receiver;
+        let d2 = to_light.length_squared();
+        if d2 <= 0.0 {
+            return None;
+        }
+        let distance = d2.sqrt();
+        let wi = to_light / distance;
+        let scale = self.falloff((-wi).dot(self.axis));
+        if scale <= 0.0 {
+            return None;
+        }
+        Some(IncidentSample {
+            wi,
+            distance,
+            point: self.position,
+            normal: Vec3::ZERO,
+            value: self.intensity * (scale / d2),
+            pdf: 1.0,
+            delta: true,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spot(cone: f32, start: f32) -> SpotLight {
+        SpotLight {
+            position: Vec3::ZERO,
+            axis: Vec3::NEG_Y,
+            intensity: Rgb::ONE,
+            cos_cone: cone.to_radians().cos(),
+            cos_falloff_start: start.to_radians().cos(),
+        }
+    }
+
+    #[test]
+    fn hard_edge_when_falloff_equals_cone() {
+        let s = spot(30.0, 30.0);
+        assert_eq!(s.falloff(29.9f32.to_radians().cos()), 1.0);
+        assert_eq!(s.falloff(30.1f32.to_radians().cos()), 0.0);
+    }
+
+    #[test]
+    fn power_matches_numeric_integral() {
+        let s = spot(40.0, 20.0);
+        let n = 100_000;
+        let integral: f64 = (0..n)
+            .map(|i| {
+                let c = -1.0 + 2.0 * (i as f64 + 0.5) / n as f64;
+                s.falloff(c as f32) as f64 * 2.0 / n as f64
+            })
+            .sum();
+        let expected = 2.0 * std::f64::consts::PI * integral;
+        assert!((s.power() as f64 - expected).abs() < 1e-3 * expected);
+    }
+}

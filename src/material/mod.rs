@@ -1,0 +1,214 @@
+//! Materials, and the BSDFs they become at a surface point.
+//!
+//! A [`Material`] is what the scene names; [`Material::bsdf`] resolves its
+//! textures at a hit and orients it towards the outgoing direction, giving a
+//! [`Bsdf`] the integrators sample and evaluate. Both are enums, so the hot
+//! loops dispatch with a `match`, not a virtual call.
+
+mod dielectric;
+mod diffuse;
+mod frame;
+mod mirror;
+pub mod texture;
+
+pub use dielectric::fresnel_dielectric;
+pub use frame::Frame;
+pub use texture::Texture;
+
+use crate::color::Rgb;
+use glam::{Vec2, Vec3};
+use std::sync::Arc;
+
+/// A diffuse albedo: a constant or an image looked up by UV.
+#[derive(Clone, Debug)]
+pub enum Albedo {
+    Constant(Rgb),
+    Texture(Arc<Texture>),
+}
+
+#[derive(Clone, Debug)]
+pub enum Material {
+    /// Lambertian reflection, from both faces.
+    Diffuse { albedo: Albedo },
+    /// Perfect specular reflection, from both faces.
+    Mirror { reflectance: Rgb },
+    /// Smooth glass: Fresnel reflection and refraction. The geometric normal
+    /// points outside (ior 1) and away from the inside (ior `ior`).
+    Dielectric { ior: f32, transmittance: Rgb },
+}
+
+/// Which quantity a path carries. Radiance (camera paths) and importance (light
+/// paths) scatter differently through refraction: see Veach's thesis, §5.2.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transport {
+    Radiance,
+    Importance,
+}
+
+/// What the integrator knows about a surface point.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    pub position: Vec3,
+    /// Unit geometric normal by counter-clockwise winding (the front side).
+    pub geometric_normal: Vec3,
+    /// Unit interpolated shading normal, on the same side as the geometric normal.
+    pub shading_normal: Vec3,
+    pub uv: Vec2,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub enum BsdfKind {
+    Diffuse {
+        albedo: Rgb,
+    },
+    Mirror {
+        reflectance: Rgb,
+    },
+    /// `eta` = index on the far side / index on the side of `wo`.
+    Dielectric {
+        eta: f32,
+        transmittance: Rgb,
+    },
+}
+
+/// A BSDF at one surface point, oriented to the side its outgoing direction is on.
+#[derive(Clone, Copy, Debug)]
+pub struct Bsdf {
+    pub kind: BsdfKind,
+    /// Shading frame; its normal is on the side of `wo`.
+    frame: Frame,
+    /// Geometric normal on the side of `wo`: decides reflection from transmission.
+    ng: Vec3,
+}
+
+/// A sampled direction and its weight `f · |cos θ| / pdf`.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    pub wi: Vec3,
+    pub weight: Rgb,
+    /// Solid-angle density; for a delta lobe, the probability of choosing that lobe.
+    pub pdf: f32,
+    pub delta: bool,
+}
+
+impl Material {
+    /// The BSDF for light leaving `surface` towards `wo` (a unit vector).
+    pub fn bsdf(&self, surface: &SurfacePoint, wo: Vec3) -> Bsdf {
+        let outside = wo.dot(surface.geometric_normal) >= 0.0;
+        let ng = if outside {
+            surface.geometric_normal
+        } else {
+            -surface.geometric_normal
+        };
+        let mut ns = if outside {
+            surface.shading_normal
+        } else {
+            -surface.shading_normal
+        };
+        // An interpolated normal can tilt past `wo`; the geometric one never does.
+        if ns.dot(wo) <= 0.0 {
+            ns = ng;
+        }
+        let kind = match self {
+            Material::Diffuse { albedo } => BsdfKind::Diffuse {
+                albedo: match albedo {
+                    Albedo::Constant(c) => *c,
+                    Albedo::Texture(t) => t.lookup(surface.uv),
+                },
+            },
+            Material::Mirror { reflectance } => BsdfKind::Mirror {
+                reflectance: *reflectance,
+            },
+            Material::Dielectric { ior, transmittance } => BsdfKind::Dielectric {
+                eta: if outside { *ior } else { 1.0 / *ior },
+                transmittance: *transmittance,
+            },
+        };
+        Bsdf {
+            kind,
+            frame: Frame::new(ns),
+            ng,
+        }
+    }
+
+    pub fn is_delta(&self) -> bool {
+        !matches!(self, Material::Diffuse { .. })
+    }
+}
+
+impl Bsdf {
+    pub fn is_delta(&self) -> bool {
+        !matches!(self.kind, BsdfKind::Diffuse { .. })
+    }
+
+    pub fn shading_normal(&self) -> Vec3 {
+        self.frame.n
+    }
+
+    /// `f(wo, wi) · |cos θi|` with θi measured from the shading normal; zero for
+    /// delta lobes and for directions on the wrong geometric side.
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self.kind {
+            BsdfKind::Diffuse { albedo } => {
+                if wi.dot(self.ng) <= 0.0 {
+                    return Rgb::ZERO;
+                }
+                diffuse::eval(albedo, self.frame.to_local(wi))
+            }
+            _ => {
+                let _ = wo;
+                Rgb::ZERO
+            }
+        }
+    }
+
+    /// Solid-angle density with which [`Bsdf::sample`] picks `wi`; zero for delta lobes.
+    pub fn pdf(&self, _wo: Vec3, wi: Vec3) -> f32 {
+        match self.kind {
+            BsdfKind::Diffuse { .. } if wi.dot(self.ng) > 0.0 => {
+                diffuse::pdf(self.frame.to_local(wi))
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Samples an incident direction; `u` picks the direction, `u_lobe` the lobe.
+    pub fn sample(
+        &self,
+        wo: Vec3,
+        u: (f32, f32),
+        u_lobe: f32,
+        mode: Transport,
+    ) -> Option<BsdfSample> {
+        let wo_local = self.frame.to_local(wo);
+        let (wi_local, weight, pdf, delta) = match self.kind {
+            BsdfKind::Diffuse { albedo } => diffuse::sample(albedo, u)?,
+            BsdfKind::Mirror { reflectance } => mirror::sample(reflectance, wo_local),
+            BsdfKind::Dielectric { eta, transmittance } => {
+                dielectric::sample(eta, transmittance, wo_local, u_lobe, mode)?
+            }
+        };
+        let wi = self.frame.to_world(wi_local);
+        // Shading normals can send a "reflected" direction through the surface
+        // (or a refracted one back out): such a path would leak light, so end it.
+        let reflected = wi_local.z > 0.0;
+        if (wi.dot(self.ng) > 0.0) != reflected {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf,
+            delta,
+        })
+    }
+}
+
+/// Reflects `w` about the +z axis of a local frame.
+pub(crate) fn reflect_local(w: Vec3) -> Vec3 {
+    Vec3::new(-w.x, -w.y, w.z)
+}
+
+pub(crate) fn safe_sqrt(x: f32) -> f32 {
+    x.max(0.0).sqrt()
+}

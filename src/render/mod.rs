@@ -1,0 +1,123 @@
+//! Drives a render: the image is cut into square tiles, and passes over all
+//! tiles add samples until the sample count or the time limit is reached.
+//! Tiles are scheduled over rayon, one tile per thread at a time; each tile
+//! owns its pixels, so no locks are taken, and a pixel's samples are a pure
+//! function of the seed, so the image is the same for any thread count.
+
+mod progress;
+mod tiles;
+
+pub use tiles::{Tile, TILE_SIZE};
+
+use crate::color::{is_finite, Rgb};
+use crate::film::Image;
+use crate::integrator::pt;
+use crate::sampling::Sampler;
+use crate::scene::desc::IntegratorKind;
+use crate::scene::Scene;
+use crate::{Error, Result};
+use progress::Progress;
+use rayon::prelude::*;
+use std::time::Instant;
+
+#[derive(Clone, Debug, Default)]
+pub struct RenderOptions {
+    /// Worker threads; `None` uses one per core.
+    pub threads: Option<usize>,
+    /// Show a progress bar on stderr (only drawn when stderr is a terminal).
+    pub progress: bool,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    /// Samples taken per pixel (fewer than asked if the time limit stopped the render).
+    pub spp: u32,
+    pub samples: u64,
+    /// Samples whose estimate was NaN or infinite, replaced by zero.
+    pub discarded: u64,
+    pub seconds: f64,
+    pub passes: u32,
+}
+
+impl RenderStats {
+    pub fn samples_per_second(&self) -> f64 {
+        self.samples as f64 / self.seconds.max(1e-9)
+    }
+}
+
+/// Samples per pixel in pass `k`: 1, 1, 2, 4, … up to 64, so the time limit is
+/// checked often early on and rarely once the render is under way.
+fn pass_size(k: u32) -> u32 {
+    1u32 << k.saturating_sub(1).min(6)
+}
+
+pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Image, RenderStats)> {
+    let settings = &scene.settings;
+    if settings.integrator != IntegratorKind::Pt {
+        return Err(Error::Unsupported(format!(
+            "the {:?} integrator is not available yet; use --integrator pt",
+            settings.integrator
+        )));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| Error::Unsupported(format!("cannot start worker threads: {e}")))?;
+    let (width, height) = (settings.width, settings.height);
+    let mut tiles = tiles::split(width, height);
+    let pixels = width as u64 * height as u64;
+    let progress = Progress::new(options.progress, pixels * settings.spp as u64);
+    let start = Instant::now();
+    let mut stats = RenderStats::default();
+
+    while stats.spp < settings.spp {
+        let first = stats.spp;
+        let count = pass_size(stats.passes).min(settings.spp - first);
+        pool.install(|| {
+            tiles.par_iter_mut().for_each(|tile| {
+                render_tile(scene, tile, first, count);
+                progress.advance(tile.pixel_count() as u64 * count as u64);
+            })
+        });
+        stats.spp += count;
+        stats.passes += 1;
+        if settings
+            .time_limit
+            .is_some_and(|limit| start.elapsed().as_secs_f32() >= limit)
+        {
+            break;
+        }
+    }
+    progress.finish();
+
+    stats.seconds = start.elapsed().as_secs_f64();
+    stats.samples = pixels * stats.spp as u64;
+    stats.discarded = tiles.iter().map(|t| t.discarded).sum();
+    let mut image = Image::new(width, height);
+    for tile in &tiles {
+        tile.resolve_into(&mut image, stats.spp);
+    }
+    Ok((image, stats))
+}
+
+/// Adds samples `first .. first + count` to every pixel of `tile`.
+fn render_tile(scene: &Scene, tile: &mut Tile, first: u32, count: u32) {
+    let s = &scene.settings;
+    for y in tile.y0..tile.y1 {
+        for x in tile.x0..tile.x1 {
+            let mut sum = glam::DVec3::ZERO;
+            for index in first..first + count {
+                let mut sampler = Sampler::new(s.seed, x, y, index as u64);
+                let (jx, jy) = sampler.next_2d();
+                let ray = scene.camera.ray(x as f32 + jx, y as f32 + jy);
+                let l: Rgb = pt::radiance(scene, ray, &mut sampler, s.max_depth);
+                if is_finite(l) {
+                    sum += l.as_dvec3();
+                } else {
+                    tile.discarded += 1;
+                }
+            }
+            tile.add(x, y, sum);
+        }
+    }
+}

@@ -1,0 +1,36 @@
+//! A progress bar on stderr (samples per second, elapsed, ETA), drawn only
+//! when stderr is a terminal so logs and pipes stay clean.
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::IsTerminal;
+
+pub struct Progress {
+    bar: ProgressBar,
+}
+
+impl Progress {
+    pub fn new(enabled: bool, total_samples: u64) -> Progress {
+        let target = if enabled && std::io::stderr().is_terminal() {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        };
+        let bar = ProgressBar::with_draw_target(Some(total_samples), target);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{elapsed_precise} [{bar:40}] {percent:>3}%  {human_per_sec:>12} samples  ETA {eta}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        Progress { bar }
+    }
+
+    pub fn advance(&self, samples: u64) {
+        self.bar.inc(samples);
+    }
+
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}

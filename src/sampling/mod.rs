@@ -1,0 +1,9 @@
+//! Random numbers for the integrators, and the warps that turn them into
+//! directions and points.
+
+pub mod distribution;
+pub mod sampler;
+pub mod warp;
+
+pub use distribution::Distribution1D;
+pub use sampler::Sampler;

@@ -1,0 +1,413 @@
+//! Turns a [`SceneDesc`] into a renderable [`Scene`]: materials with their
+//! textures, objects as world-space triangles, lights, and the BVH.
+
+use super::desc::*;
+use super::obj::{load_obj, MtlMaterial};
+use super::texture::load_texture;
+use super::{format, trs, LoadReport, Scene, Settings, TriangleShading, NO_LIGHT};
+use crate::bvh::Bvh;
+use crate::camera::Camera;
+use crate::color::Rgb;
+use crate::geometry::shapes::{self, MeshData};
+use crate::geometry::{Aabb, Triangle};
+use crate::light::{AreaLight, DirectionalLight, Light, LightSelector, PointLight, SpotLight};
+use crate::material::{Albedo, Material, Texture};
+use crate::{Error, Result};
+use glam::Vec2;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The largest image accepted, in pixels (a 16k × 16k render).
+const MAX_PIXELS: u64 = 1 << 28;
+
+/// Reads a scene file (`.json`, or `.trs` for T-racer scenes) into a description.
+pub fn parse_file(path: &Path) -> Result<SceneDesc> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let is_trs = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("trs"));
+    if is_trs {
+        trs::parse(&text, path)
+    } else {
+        format::parse(&text, path)
+    }
+}
+
+/// Reads and prepares the scene in `path`.
+pub fn load(path: &Path) -> Result<Scene> {
+    load_desc(parse_file(path)?)
+}
+
+pub(super) fn make_camera(c: &CameraDesc, width: u32, height: u32) -> Option<Camera> {
+    Camera::new(c.position.0, c.look_at.0, c.up.0, c.fov.0, width, height)
+}
+
+struct Builder<'a> {
+    file: &'a Path,
+    materials: Vec<Material>,
+    material_names: Vec<String>,
+    by_name: HashMap<String, u32>,
+    textures: HashMap<PathBuf, Arc<Texture>>,
+    triangles: Vec<Triangle>,
+    shading: Vec<TriangleShading>,
+    /// Emission and two-sidedness of each emissive triangle, by triangle index.
+    emitters: Vec<(u32, Rgb, bool)>,
+    report: LoadReport,
+}
+
+/// Prepares a described scene for rendering.
+pub fn load_desc(desc: SceneDesc) -> Result<Scene> {
+    let file = desc.file.as_path();
+    let err = |path: &str, msg: String| Error::scene(file, path, msg);
+
+    let (width, height) = (desc.film.width.0, desc.film.height.0);
+    if width as u64 * height as u64 > MAX_PIXELS {
+        return Err(err(
+            "film",
+            format!("{width} x {height} is too large (at most {MAX_PIXELS} pixels)"),
+        ));
+    }
+    if desc.camera.fov.0 >= 180.0 {
+        return Err(err(
+            "camera.fov",
+            format!(
+                "expected less than 180 degrees, found {}",
+                desc.camera.fov.0
+            ),
+        ));
+    }
+    let camera = make_camera(&desc.camera, width, height).ok_or_else(|| {
+        err(
+            "camera",
+            "position and look_at must differ, and up must not be parallel to the view direction"
+                .into(),
+        )
+    })?;
+
+    let mut b = Builder {
+        file,
+        materials: Vec::new(),
+        material_names: Vec::new(),
+        by_name: HashMap::new(),
+        textures: HashMap::new(),
+        triangles: Vec::new(),
+        shading: Vec::new(),
+        emitters: Vec::new(),
+        report: LoadReport::default(),
+    };
+    for (name, m) in &desc.materials {
+        let material = b.material(m, &format!("materials.{name}"), None)?;
+        b.add_material(name.clone(), material);
+    }
+    let default_material = match b.by_name.get("default") {
+        Some(&i) => i,
+        None => b.add_material(
+            "(built-in default)".into(),
+            Material::Diffuse {
+                albedo: Albedo::Constant(Rgb::splat(0.5)),
+            },
+        ),
+    };
+    for object in &desc.objects {
+        b.object(object, default_material)?;
+    }
+
+    let bounds = b
+        .triangles
+        .iter()
+        .fold(Aabb::EMPTY, |a, t| a.union(Aabb::from_points(&t.v)));
+    let mut lights = Vec::new();
+    for &(tri, radiance, two_sided) in &b.emitters {
+        b.shading[tri as usize].light = lights.len() as u32;
+        lights.push(Light::Area(AreaLight::new(
+            b.triangles[tri as usize],
+            tri,
+            radiance,
+            two_sided,
+        )));
+    }
+    for (_, l) in &desc.lights {
+        lights.push(make_light(l, &bounds));
+    }
+    if lights.iter().all(|l| l.power() <= 0.0) {
+        b.report
+            .warnings
+            .push("the scene has no light that emits anything: the image will be black".into());
+    }
+
+    let start = Instant::now();
+    let bvh = Bvh::build(&b.triangles);
+    b.report.bvh_build_seconds = start.elapsed().as_secs_f64();
+
+    let output = match &desc.film.output {
+        Some(o) => format::resolve(file, o),
+        None => format::resolve(file, &format!("{}.exr", desc.name)),
+    };
+    Ok(Scene {
+        name: desc.name.clone(),
+        file: file.to_path_buf(),
+        camera_desc: desc.camera.clone(),
+        camera,
+        settings: Settings {
+            integrator: desc.render.integrator,
+            spp: desc.render.spp.0,
+            time_limit: desc.render.time_limit.map(|t| t.0),
+            max_depth: desc.render.max_depth.0,
+            seed: desc.render.seed,
+            width,
+            height,
+            output,
+            tonemap: desc.film.tonemap,
+            exposure: desc.film.exposure.0,
+        },
+        display: desc.display,
+        light_selector: LightSelector::new(&lights),
+        lights,
+        bvh,
+        bounds,
+        triangles: b.triangles,
+        shading: b.shading,
+        materials: b.materials,
+        material_names: b.material_names,
+        report: b.report,
+    })
+}
+
+fn make_light(l: &LightDesc, bounds: &Aabb) -> Light {
+    match *l {
+        LightDesc::Point {
+            position,
+            intensity,
+        } => Light::Point(PointLight {
+            position,
+            intensity,
+        }),
+        LightDesc::Spot {
+            position,
+            look_at,
+            intensity,
+            cone_angle,
+            falloff_start,
+        } => Light::Spot(SpotLight {
+            position,
+            axis: (look_at - position).normalize(),
+            intensity,
+            cos_cone: cone_angle.to_radians().cos(),
+            cos_falloff_start: falloff_start.to_radians().cos(),
+        }),
+        LightDesc::Directional {
+            direction,
+            irradiance,
+        } => Light::Directional(DirectionalLight {
+            direction: direction.normalize(),
+            irradiance,
+            scene_radius: bounds.bounding_sphere().1,
+        }),
+    }
+}
+
+impl Builder<'_> {
+    fn add_material(&mut self, name: String, m: Material) -> u32 {
+        let index = self.materials.len() as u32;
+        self.materials.push(m);
+        self.by_name.insert(name.clone(), index);
+        self.material_names.push(name);
+        index
+    }
+
+    fn texture(&mut self, path: &Path) -> std::result::Result<Arc<Texture>, String> {
+        if let Some(t) = self.textures.get(path) {
+            return Ok(t.clone());
+        }
+        let t = Arc::new(load_texture(path)?);
+        self.textures.insert(path.to_path_buf(), t.clone());
+        Ok(t)
+    }
+
+    /// Builds a material. For MTL materials, `fallback` is the `Kd` to use
+    /// (with a warning) when `map_Kd` cannot be read; a texture named in the
+    /// scene file itself must load.
+    fn material(
+        &mut self,
+        m: &MaterialDesc,
+        path: &str,
+        fallback: Option<Rgb>,
+    ) -> Result<Material> {
+        Ok(match m {
+            MaterialDesc::Diffuse { albedo } => Material::Diffuse {
+                albedo: match albedo {
+                    AlbedoDesc::Constant(c) => Albedo::Constant(*c),
+                    AlbedoDesc::Texture(t) => match (self.texture(t), fallback) {
+                        (Ok(t), _) => Albedo::Texture(t),
+                        (Err(e), Some(kd)) => {
+                            self.report
+                                .warnings
+                                .push(format!("{path}: {e}; using Kd instead"));
+                            Albedo::Constant(kd)
+                        }
+                        (Err(e), None) => return Err(Error::scene(self.file, path, e)),
+                    },
+                },
+            },
+            MaterialDesc::Mirror { reflectance } => Material::Mirror {
+                reflectance: *reflectance,
+            },
+            MaterialDesc::Dielectric { ior, transmittance } => Material::Dielectric {
+                ior: *ior,
+                transmittance: *transmittance,
+            },
+        })
+    }
+
+    fn object(&mut self, o: &ObjectDesc, default_material: u32) -> Result<()> {
+        let path = o.key_path.as_str();
+        let named = match &o.material {
+            Some(name) => Some(*self.by_name.get(name).ok_or_else(|| {
+                let mut known: Vec<&str> = self.by_name.keys().map(String::as_str).collect();
+                known.sort();
+                Error::scene(
+                    self.file,
+                    format!("{path}.material"),
+                    format!(
+                        "unknown material \"{name}\" (defined: {})",
+                        known.join(", ")
+                    ),
+                )
+            })?),
+            None => None,
+        };
+        match &o.shape {
+            ShapeDesc::Mesh { file, mtl_override } => {
+                let file_key = if o.key_path.starts_with('"') {
+                    "MeshName"
+                } else {
+                    "file"
+                };
+                let obj = load_obj(file, *mtl_override)
+                    .map_err(|e| Error::scene(self.file, format!("{path}.{file_key}"), e))?;
+                self.report.warnings.extend(obj.warnings);
+                let mut mtl_indices: HashMap<String, (u32, Option<Rgb>)> = HashMap::new();
+                for group in obj.groups {
+                    let (material, mtl_emission) = match (named, &group.material) {
+                        (Some(m), _) => (m, None),
+                        (None, Some(mtl)) => {
+                            self.mtl_material(mtl, file, path, &mut mtl_indices)?
+                        }
+                        (None, None) => (default_material, None),
+                    };
+                    let emission = o.emission.or(mtl_emission);
+                    self.add_mesh(&group.mesh, o, material, emission);
+                }
+            }
+            ShapeDesc::Quad => self.add_mesh(
+                &shapes::quad(),
+                o,
+                named.unwrap_or(default_material),
+                o.emission,
+            ),
+            ShapeDesc::Cube => self.add_mesh(
+                &shapes::cube(),
+                o,
+                named.unwrap_or(default_material),
+                o.emission,
+            ),
+            ShapeDesc::Sphere {
+                center,
+                radius,
+                subdivisions,
+            } => self.add_mesh(
+                &shapes::sphere(*center, *radius, *subdivisions),
+                o,
+                named.unwrap_or(default_material),
+                o.emission,
+            ),
+            ShapeDesc::Triangles {
+                positions,
+                indices,
+                normals,
+                uvs,
+            } => {
+                let mesh = MeshData {
+                    positions: positions.clone(),
+                    normals: normals.clone(),
+                    uvs: uvs.clone(),
+                    indices: indices
+                        .clone()
+                        .unwrap_or_else(|| (0..positions.len() as u32).collect()),
+                };
+                self.add_mesh(&mesh, o, named.unwrap_or(default_material), o.emission)
+            }
+        }
+        Ok(())
+    }
+
+    fn mtl_material(
+        &mut self,
+        mtl: &MtlMaterial,
+        file: &Path,
+        path: &str,
+        seen: &mut HashMap<String, (u32, Option<Rgb>)>,
+    ) -> Result<(u32, Option<Rgb>)> {
+        if let Some(&found) = seen.get(&mtl.name) {
+            return Ok(found);
+        }
+        let material = self.material(
+            &mtl.desc,
+            &format!("{path} (material {})", mtl.name),
+            Some(mtl.kd),
+        )?;
+        let name = format!(
+            "{}:{}",
+            file.file_name().unwrap_or_default().to_string_lossy(),
+            mtl.name
+        );
+        let index = self.add_material(name, material);
+        seen.insert(mtl.name.clone(), (index, mtl.emission));
+        Ok((index, mtl.emission))
+    }
+
+    /// Transforms `mesh` into world space and appends its triangles, dropping
+    /// (and counting) those with zero area.
+    fn add_mesh(&mut self, mesh: &MeshData, o: &ObjectDesc, material: u32, emission: Option<Rgb>) {
+        let world: Vec<_> = mesh
+            .positions
+            .iter()
+            .map(|&p| o.transform.point(p))
+            .collect();
+        let normals: Option<Vec<_>> = mesh
+            .normals
+            .as_ref()
+            .map(|ns| ns.iter().map(|&n| o.transform.normal(n)).collect());
+        let emission = emission.filter(|e| e.max_element() > 0.0);
+        for f in mesh.indices.chunks_exact(3) {
+            let [a, b, c] = [f[0] as usize, f[1] as usize, f[2] as usize];
+            let tri = Triangle::new(world[a], world[b], world[c]);
+            let area = tri.area();
+            if !(area > 0.0 && area.is_finite()) {
+                self.report.degenerate_triangles_dropped += 1;
+                continue;
+            }
+            let vertex_normals = normals.as_ref().and_then(|n| {
+                let ns = [n[a], n[b], n[c]];
+                ns.iter().all(|n| n.length_squared() > 0.0).then_some(ns)
+            });
+            let uvs = mesh
+                .uvs
+                .as_ref()
+                .map_or([Vec2::ZERO; 3], |uv| [uv[a], uv[b], uv[c]]);
+            let index = self.triangles.len() as u32;
+            self.triangles.push(tri);
+            self.shading.push(TriangleShading {
+                normals: vertex_normals,
+                uvs,
+                material,
+                light: NO_LIGHT,
+            });
+            if let Some(e) = emission {
+                self.emitters.push((index, e, o.two_sided));
+            }
+        }
+    }
+}
