@@ -1,0 +1,235 @@
+//! The BVH must find exactly what testing every triangle finds.
+
+mod common;
+
+use common::Rng;
+use glam::Vec3;
+use tracer::bvh::{BuildOptions, Bvh, Hit};
+use tracer::geometry::shapes;
+use tracer::geometry::triangle::RayShear;
+use tracer::geometry::{Ray, Triangle};
+
+fn brute_force(tris: &[Triangle], ray: &Ray) -> Option<Hit> {
+    let shear = RayShear::new(ray.origin, ray.dir);
+    let mut best: Option<Hit> = None;
+    let mut tmax = ray.tmax;
+    for (i, t) in tris.iter().enumerate() {
+        if let Some(h) = shear.intersect(t, ray.tmin, tmax) {
+            tmax = h.t;
+            best = Some(Hit {
+                triangle: i as u32,
+                t: h.t,
+                b1: h.b1,
+                b2: h.b2,
+            });
+        }
+    }
+    best
+}
+
+fn soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Triangle> {
+    (0..n)
+        .map(|k| {
+            let c = rng.vec3(-10.0, 10.0);
+            let a = c + rng.vec3(-size, size);
+            let b = c + rng.vec3(-size, size);
+            match k % 17 {
+                // Degenerate: a repeated vertex, and three collinear points.
+                0 => Triangle::new(a, a, b),
+                1 => Triangle::new(a, 0.5 * (a + b), b),
+                _ => Triangle::new(a, b, c + rng.vec3(-size, size)),
+            }
+        })
+        .collect()
+}
+
+fn random_ray(rng: &mut Rng, k: usize) -> Ray {
+    let origin = rng.vec3(-12.0, 12.0);
+    let mut dir = rng.unit_vector();
+    // Every fourth ray is axis-parallel or lies in a coordinate plane, where
+    // the slab test divides by zero.
+    match k % 8 {
+        0 => dir = Vec3::new(0.0, 0.0, dir.z.signum()),
+        2 => dir = Vec3::new(dir.x, 0.0, dir.z).normalize(),
+        4 => dir = Vec3::new(dir.x.signum(), 0.0, 0.0),
+        6 => dir = Vec3::new(0.0, dir.y.signum(), 0.0),
+        _ => {}
+    }
+    Ray::new(origin, dir)
+}
+
+fn assert_same(tris: &[Triangle], bvh: &Bvh, ray: &Ray) {
+    let expected = brute_force(tris, ray);
+    let found = bvh.intersect(ray);
+    match (expected, found) {
+        (None, None) => {}
+        (Some(e), Some(f)) => {
+            assert_eq!(e.t, f.t, "distance differs for {ray:?}");
+            if e.triangle != f.triangle {
+                // Two triangles at exactly the same distance: either is right,
+                // but the BVH's must really be hit there.
+                let shear = RayShear::new(ray.origin, ray.dir);
+                let h = shear
+                    .intersect(&tris[f.triangle as usize], ray.tmin, ray.tmax)
+                    .unwrap();
+                assert_eq!(h.t, e.t, "BVH reported triangle {} for {ray:?}", f.triangle);
+            }
+        }
+        (e, f) => panic!("brute force {e:?} but BVH {f:?} for {ray:?}"),
+    }
+    assert_eq!(
+        bvh.occluded(ray),
+        expected.is_some(),
+        "any-hit disagrees for {ray:?}"
+    );
+}
+
+#[test]
+fn random_soups_match_brute_force() {
+    let mut rng = Rng::new(7);
+    for (n, size) in [(1, 3.0), (10, 3.0), (300, 2.0), (3000, 0.7)] {
+        let tris = soup(&mut rng, n, size);
+        for options in [
+            BuildOptions::default(),
+            BuildOptions {
+                bins: 4,
+                max_leaf_size: 1,
+            },
+        ] {
+            let bvh = Bvh::build_with(&tris, &options);
+            for k in 0..2000 {
+                let mut ray = random_ray(&mut rng, k);
+                if k % 5 == 0 {
+                    ray.tmax = rng.range(0.0, 20.0);
+                }
+                if k % 7 == 0 {
+                    ray.tmin = rng.range(0.0, 5.0);
+                }
+                assert_same(&tris, &bvh, &ray);
+            }
+        }
+    }
+}
+
+#[test]
+fn rays_aimed_at_triangles_match_brute_force() {
+    // Random rays mostly miss a sparse soup; aim at vertices and edges too.
+    let mut rng = Rng::new(11);
+    let tris = soup(&mut rng, 500, 1.5);
+    let bvh = Bvh::build(&tris);
+    for k in 0..5000 {
+        let t = tris[k % tris.len()];
+        let target = match k % 3 {
+            0 => t.v[k % 3],
+            1 => 0.5 * (t.v[0] + t.v[1]),
+            _ => t.point(rng.f32() * 0.5, rng.f32() * 0.5),
+        };
+        let origin = rng.vec3(-15.0, 15.0);
+        let ray = Ray::new(origin, (target - origin).normalize());
+        assert_same(&tris, &bvh, &ray);
+    }
+}
+
+#[test]
+fn coplanar_grid_and_extreme_coordinates() {
+    let mut rng = Rng::new(3);
+    for scale in [1e-4f32, 1.0, 1e5] {
+        // A grid of triangles all in the plane y = 0.
+        let mut tris = Vec::new();
+        for i in 0..20 {
+            for j in 0..20 {
+                let p = |a: f32, b: f32| Vec3::new(a, 0.0, b) * scale;
+                let (x, z) = (i as f32, j as f32);
+                tris.push(Triangle::new(p(x, z), p(x, z + 1.0), p(x + 1.0, z + 1.0)));
+                tris.push(Triangle::new(p(x, z), p(x + 1.0, z + 1.0), p(x + 1.0, z)));
+            }
+        }
+        let bvh = Bvh::build(&tris);
+        for k in 0..2000 {
+            let origin = (rng.vec3(-2.0, 22.0) * Vec3::new(1.0, 0.0, 1.0)
+                + Vec3::Y * rng.range(0.5, 5.0))
+                * scale;
+            let target = Vec3::new(rng.range(0.0, 20.0), 0.0, rng.range(0.0, 20.0)) * scale;
+            let ray = Ray::new(origin, (target - origin).normalize());
+            assert_same(&tris, &bvh, &ray);
+            // Rays through the grid's vertices and edges must hit (watertight).
+            let vertex = Vec3::new((k % 19 + 1) as f32, 0.0, (k / 19 % 19 + 1) as f32) * scale;
+            let ray = Ray::new(origin, (vertex - origin).normalize());
+            assert!(
+                bvh.intersect(&ray).is_some(),
+                "ray through a shared vertex at scale {scale} missed"
+            );
+            assert_same(&tris, &bvh, &ray);
+        }
+    }
+}
+
+#[test]
+fn closed_mesh_is_watertight_from_inside() {
+    let mesh = shapes::sphere(Vec3::new(0.3, -0.2, 0.1), 2.0, 3);
+    let tris: Vec<Triangle> = mesh
+        .indices
+        .chunks(3)
+        .map(|f| {
+            Triangle::new(
+                mesh.positions[f[0] as usize],
+                mesh.positions[f[1] as usize],
+                mesh.positions[f[2] as usize],
+            )
+        })
+        .collect();
+    let bvh = Bvh::build(&tris);
+    let mut rng = Rng::new(5);
+    let center = Vec3::new(0.3, -0.2, 0.1);
+    for k in 0..20000 {
+        // Through vertices (shared by 5-6 triangles) and edge midpoints.
+        let f = &mesh.indices[(k % (mesh.indices.len() / 3)) * 3..][..3];
+        let p = |i: usize| mesh.positions[f[i] as usize];
+        let target = if k % 2 == 0 {
+            p(0)
+        } else {
+            0.5 * (p(1) + p(2))
+        };
+        let origin = center + rng.vec3(-0.5, 0.5);
+        let ray = Ray::new(origin, (target - origin).normalize());
+        assert!(
+            bvh.intersect(&ray).is_some(),
+            "ray {k} escaped the closed sphere"
+        );
+    }
+}
+
+#[test]
+fn empty_and_single_triangle_scenes() {
+    let empty = Bvh::build(&[]);
+    let ray = Ray::new(Vec3::ZERO, Vec3::Z);
+    assert!(empty.intersect(&ray).is_none());
+    assert!(!empty.occluded(&ray));
+
+    let one = [Triangle::new(
+        Vec3::new(-1.0, -1.0, 5.0),
+        Vec3::new(1.0, -1.0, 5.0),
+        Vec3::new(0.0, 1.0, 5.0),
+    )];
+    let bvh = Bvh::build(&one);
+    let hit = bvh.intersect(&ray).unwrap();
+    assert_eq!((hit.triangle, hit.t), (0, 5.0));
+    // tmax just short of the triangle, and tmin just past it.
+    assert!(bvh.intersect(&Ray { tmax: 4.999, ..ray }).is_none());
+    assert!(bvh.intersect(&Ray { tmin: 5.0, ..ray }).is_none());
+    assert!(
+        bvh.intersect(&Ray { tmin: 4.999, ..ray }).is_some(),
+        "a hit just beyond tmin is kept"
+    );
+}
+
+#[test]
+fn sah_cost_is_reported_and_sensible() {
+    let mut rng = Rng::new(1);
+    let tris = soup(&mut rng, 5000, 0.3);
+    let bvh = Bvh::build(&tris);
+    let cost = bvh.sah_cost();
+    // A flat list would cost 5000 triangle tests; a good tree a few dozen.
+    assert!(cost > 1.0 && cost < 100.0, "SAH cost {cost}");
+    assert_eq!(bvh.triangle_count(), 5000);
+}

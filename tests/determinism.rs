@@ -1,0 +1,45 @@
+//! The image is a pure function of scene, settings and seed.
+
+mod common;
+
+use tracer::render::{render, RenderOptions};
+
+fn cornell(seed: u64) -> tracer::scene::Scene {
+    let mut scene =
+        tracer::scene::load(&common::repo().join("scenes/cornell-caustics.json")).unwrap();
+    scene.set_resolution(40, 36);
+    scene.settings.spp = 6;
+    scene.settings.seed = seed;
+    scene
+}
+
+#[test]
+fn same_seed_same_image_for_any_thread_count() {
+    let scene = cornell(5);
+    let images: Vec<_> = [1, 2, 3]
+        .iter()
+        .map(|&threads| {
+            let options = RenderOptions {
+                threads: Some(threads),
+                progress: false,
+            };
+            render(&scene, &options).unwrap().0
+        })
+        .collect();
+    assert!(images[0].mean().x > 0.0);
+    let bits = |i: &tracer::film::Image| {
+        i.pixels
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&images[0]), bits(&images[1]), "1 vs 2 threads");
+    assert_eq!(bits(&images[0]), bits(&images[2]), "1 vs 3 threads");
+}
+
+#[test]
+fn different_seeds_give_different_noise() {
+    let a = render(&cornell(1), &RenderOptions::default()).unwrap().0;
+    let b = render(&cornell(2), &RenderOptions::default()).unwrap().0;
+    assert_ne!(a, b);
+}
