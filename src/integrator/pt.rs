@@ -80,7 +80,7 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
 
         if segments >= ROULETTE_START {
             let survive = throughput.max_element().min(1.0);
-            if !(sampler.next_1d() < survive) {
+            if sampler.next_1d() >= survive {
                 break;
             }
             throughput /= survive;
@@ -132,7 +132,7 @@ pub fn unoccluded(scene: &Scene, surface: &SurfacePoint, sample: &IncidentSample
         };
         let to_target = target - origin;
         let distance = to_target.length();
-        if !(distance > 0.0) {
+        if distance.is_nan() || distance <= 0.0 {
             return true;
         }
         Ray::segment(origin, to_target / distance, distance)

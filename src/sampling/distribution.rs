@@ -11,7 +11,7 @@ impl Distribution1D {
     /// `None` when every weight is zero (nothing can be sampled).
     pub fn new(weights: &[f32]) -> Option<Distribution1D> {
         let total: f64 = weights.iter().map(|&w| w.max(0.0) as f64).sum();
-        if !(total > 0.0) || !total.is_finite() {
+        if !total.is_finite() || total <= 0.0 {
             return None;
         }
         let mut cdf = Vec::with_capacity(weights.len() + 1);

@@ -393,7 +393,7 @@ impl Ctx<'_> {
     ) -> Result<()> {
         let n = positions.len();
         let count = indices.as_ref().map_or(n, Vec::len);
-        if count == 0 || count % 3 != 0 {
+        if count == 0 || !count.is_multiple_of(3) {
             let key = if indices.is_some() {
                 "indices"
             } else {

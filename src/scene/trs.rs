@@ -121,7 +121,7 @@ pub fn parse(text: &str, file: &Path) -> Result<SceneDesc> {
                     ])?;
                     let radiance = member.color("Intensity")?;
                     let positions = member.vec3_list("Vertices")?;
-                    if positions.is_empty() || positions.len() % 3 != 0 {
+                    if positions.is_empty() || !positions.len().is_multiple_of(3) {
                         return Err(err(
                             &format!("{path}.Vertices"),
                             format!(
@@ -174,12 +174,14 @@ pub fn parse(text: &str, file: &Path) -> Result<SceneDesc> {
                         "Diffuse" => MaterialOverride::Diffuse,
                         "Mirror" => MaterialOverride::Mirror,
                         "Glass" => MaterialOverride::Glass,
-                        other => return Err(err(
-                            &format!("{path}.\"Mesh Material\""),
-                            format!(
+                        other => {
+                            return Err(err(
+                                &format!("{path}.\"Mesh Material\""),
+                                format!(
                                 "unknown material \"{other}\", expected Diffuse, Mirror or Glass"
                             ),
-                        )),
+                            ))
+                        }
                     }),
                 };
                 objects.push(ObjectDesc {
