@@ -11,20 +11,33 @@ use tracer::geometry::{Ray, Triangle};
 fn triangles_of(mesh: &shapes::MeshData) -> Vec<Triangle> {
     mesh.indices
         .chunks(3)
-        .map(|f| Triangle::new(mesh.positions[f[0] as usize], mesh.positions[f[1] as usize], mesh.positions[f[2] as usize]))
+        .map(|f| {
+            Triangle::new(
+                mesh.positions[f[0] as usize],
+                mesh.positions[f[1] as usize],
+                mesh.positions[f[2] as usize],
+            )
+        })
         .collect()
 }
 
 fn bunny() -> Option<Vec<Triangle>> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes/bunny.obj");
     let obj = tracer::scene::obj::load_obj(&path, None).ok()?;
-    Some(obj.groups.iter().flat_map(|g| triangles_of(&g.mesh)).collect())
+    Some(
+        obj.groups
+            .iter()
+            .flat_map(|g| triangles_of(&g.mesh))
+            .collect(),
+    )
 }
 
 /// Rays from points around the mesh's bounds towards random points inside it:
 /// incoherent, mostly hitting.
 fn rays(tris: &[Triangle], n: usize) -> Vec<Ray> {
-    let bounds = tris.iter().fold(tracer::geometry::Aabb::EMPTY, |b, t| b.union(tracer::geometry::Aabb::from_points(&t.v)));
+    let bounds = tris.iter().fold(tracer::geometry::Aabb::EMPTY, |b, t| {
+        b.union(tracer::geometry::Aabb::from_points(&t.v))
+    });
     let (c, r) = bounds.bounding_sphere();
     let mut state = 12345u32;
     let mut next = || {
@@ -50,7 +63,9 @@ fn bench_mesh(c: &mut Criterion, name: &str, tris: &[Triangle]) {
     group.bench_function("closest_hit", |b| {
         b.iter(|| rays.iter().filter(|r| bvh.intersect(r).is_some()).count())
     });
-    group.bench_function("any_hit", |b| b.iter(|| rays.iter().filter(|r| bvh.occluded(r)).count()));
+    group.bench_function("any_hit", |b| {
+        b.iter(|| rays.iter().filter(|r| bvh.occluded(r)).count())
+    });
     group.finish();
 }
 

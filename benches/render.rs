@@ -12,7 +12,9 @@ fn benches(c: &mut Criterion) {
         scene.set_resolution(128, 128);
         scene.settings.spp = 4;
         group.throughput(Throughput::Elements(128 * 128 * 4));
-        group.bench_function(name, |b| b.iter(|| render(&scene, &RenderOptions::default()).unwrap()));
+        group.bench_function(name, |b| {
+            b.iter(|| render(&scene, &RenderOptions::default()).unwrap())
+        });
     }
     group.finish();
 }

@@ -24,11 +24,12 @@ pub fn quad() -> MeshData {
             Vec3::new(0.5, 0.0, -0.5),
         ],
         normals: None,
+        // u along +x, v along −z: seen from the front (+y), the texture is upright, not mirrored.
         uvs: Some(vec![
-            Vec2::new(0.0, 0.0),
             Vec2::new(0.0, 1.0),
-            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 0.0),
             Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
         ]),
         indices: vec![0, 1, 2, 0, 2, 3],
     }
@@ -123,15 +124,37 @@ pub fn sphere(center: Vec3, radius: f32, level: u32) -> MeshData {
         }
         faces = next;
     }
-    let uvs = dirs
-        .iter()
-        .map(|d| {
-            Vec2::new(
-                0.5 + d.z.atan2(d.x) / (2.0 * std::f32::consts::PI),
-                0.5 - d.y.clamp(-1.0, 1.0).asin() / std::f32::consts::PI,
-            )
-        })
-        .collect();
+    // Longitude–latitude UVs: v = 1 at the north pole, u increasing eastwards
+    // as seen from outside, so the texture is upright and not mirrored.
+    let uv_of = |d: Vec3| {
+        Vec2::new(
+            0.5 + (-d.z).atan2(d.x) / (2.0 * std::f32::consts::PI),
+            0.5 + d.y.clamp(-1.0, 1.0).asin() / std::f32::consts::PI,
+        )
+    };
+    let mut uvs: Vec<Vec2> = dirs.iter().map(|&d| uv_of(d)).collect();
+    // Triangles that straddle the u = 0/1 seam would interpolate u across the
+    // whole texture: give them copies of their low-u vertices with u + 1.
+    let mut seam_copies: HashMap<u32, u32> = HashMap::new();
+    for f in faces.iter_mut() {
+        let us = f.map(|i| uvs[i as usize].x);
+        let (lo, hi) = (
+            us.iter().cloned().fold(1.0, f32::min),
+            us.iter().cloned().fold(0.0, f32::max),
+        );
+        if hi - lo <= 0.5 {
+            continue;
+        }
+        for i in f.iter_mut() {
+            if uvs[*i as usize].x < 0.5 {
+                *i = *seam_copies.entry(*i).or_insert_with(|| {
+                    dirs.push(dirs[*i as usize]);
+                    uvs.push(uvs[*i as usize] + Vec2::X);
+                    dirs.len() as u32 - 1
+                });
+            }
+        }
+    }
     MeshData {
         positions: dirs.iter().map(|&d| center + radius * d).collect(),
         normals: Some(dirs),
@@ -160,6 +183,45 @@ mod tests {
         for (n, _) in face_normals(&quad()) {
             assert!(n.normalize().abs_diff_eq(Vec3::Y, 1e-6));
         }
+    }
+
+    /// Seen from the front, +u must point right and +v up (not mirrored):
+    /// the UV axes' cross product points along the face normal.
+    #[test]
+    fn textures_are_upright_and_seamless() {
+        for mesh in [quad(), cube(), sphere(Vec3::ZERO, 1.0, 3)] {
+            let uv = mesh.uvs.as_ref().unwrap();
+            for f in mesh.indices.chunks(3) {
+                let (p, t) = (
+                    |i: usize| mesh.positions[f[i] as usize],
+                    |i: usize| uv[f[i] as usize],
+                );
+                let (e1, e2) = (p(1) - p(0), p(2) - p(0));
+                let (d1, d2) = (t(1) - t(0), t(2) - t(0));
+                let det = d1.x * d2.y - d1.y * d2.x;
+                let du = (e1 * d2.y - e2 * d1.y) / det;
+                let dv = (e2 * d1.x - e1 * d2.x) / det;
+                assert!(du.cross(dv).dot(e1.cross(e2)) > 0.0, "mirrored texture");
+            }
+        }
+        let s = sphere(Vec3::ZERO, 1.0, 3);
+        let uv = s.uvs.as_ref().unwrap();
+        for f in s.indices.chunks(3) {
+            // Near the poles longitude changes fast; elsewhere a wide u range
+            // means the triangle interpolates across the seam.
+            let polar = f.iter().any(|&i| s.positions[i as usize].y.abs() > 0.9);
+            let us = [0, 1, 2].map(|k| uv[f[k] as usize].x);
+            let spread = us.iter().cloned().fold(f32::MIN, f32::max)
+                - us.iter().cloned().fold(f32::MAX, f32::min);
+            assert!(polar || spread < 0.5, "triangle spans the seam: u = {us:?}");
+        }
+        let top = s
+            .positions
+            .iter()
+            .zip(s.uvs.unwrap())
+            .max_by(|a, b| a.0.y.total_cmp(&b.0.y))
+            .unwrap();
+        assert!(top.1.y > 0.8, "north pole at the top of the texture");
     }
 
     #[test]

@@ -21,10 +21,19 @@ impl<'de> Deserialize<'de> for Finite {
         let x = f64::deserialize(d)?;
         if !x.is_finite() || x.abs() > f32::MAX as f64 {
             return Err(D::Error::custom(format!(
-                "expected a finite number, found {x}"
+                "expected a finite number that fits in 32 bits, found {x:e}"
             )));
         }
         Ok(Finite(x as f32))
+    }
+}
+
+/// A number as a person would write it: exponent notation when very large or small.
+fn short(x: f32) -> String {
+    if x != 0.0 && !(1e-4..1e7).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
     }
 }
 
@@ -37,7 +46,8 @@ impl<'de> Deserialize<'de> for Positive {
         let Finite(x) = Finite::deserialize(d)?;
         if x <= 0.0 {
             return Err(D::Error::custom(format!(
-                "expected a number greater than zero, found {x}"
+                "expected a number greater than zero, found {}",
+                short(x)
             )));
         }
         Ok(Positive(x))

@@ -61,6 +61,7 @@ pub fn parse(text: &str, file: &Path) -> Result<SceneDesc> {
             ),
         ));
     }
+    check_view(file, &scene.camera, &scene.film, "camera.fov", "film")?;
     let ctx = Ctx { file };
     let materials = scene
         .materials
@@ -101,10 +102,23 @@ pub fn parse(text: &str, file: &Path) -> Result<SceneDesc> {
 
 /// Turns a serde_json error into ours: syntax errors by line and column,
 /// everything else by key path.
-fn json_error(file: &Path, e: serde_path_to_error::Error<serde_json::Error>) -> Error {
+pub(super) fn json_error(file: &Path, e: serde_path_to_error::Error<serde_json::Error>) -> Error {
     let path = e.path().to_string();
     let inner = e.into_inner();
     let message = strip_position(&inner.to_string());
+    // serde_json calls a number too large for an f64 (1e999) a syntax error;
+    // it is a non-finite number, and the key path says where.
+    if message.starts_with("number out of range") && path != "." {
+        return Error::scene(
+            file,
+            path,
+            format!(
+                "expected a finite number, found one out of range (line {}, column {})",
+                inner.line(),
+                inner.column()
+            ),
+        );
+    }
     match inner.classify() {
         serde_json::error::Category::Syntax | serde_json::error::Category::Eof => Error::Syntax {
             file: file.to_path_buf(),
@@ -326,6 +340,19 @@ impl Ctx<'_> {
             }
         }
         let common: Common = self.typed(Value::Object(common_map), path)?;
+        let own_keys: &[&str] = match kind.as_str() {
+            "mesh" => &["file"],
+            "sphere" => &["center", "radius", "subdivisions"],
+            "triangles" => &["positions", "indices", "normals", "uvs"],
+            _ => &[],
+        };
+        if let Some(unknown) = map.keys().find(|k| !own_keys.contains(&k.as_str())) {
+            let allowed: Vec<&str> = own_keys.iter().chain(COMMON.iter()).copied().collect();
+            return Err(self.err(
+                &format!("{path}.{unknown}"),
+                format!("unknown key, a {kind} takes: {}", allowed.join(", ")),
+            ));
+        }
         let rest = Value::Object(map);
         let shape = match kind.as_str() {
             "mesh" => {
@@ -580,6 +607,36 @@ impl Ctx<'_> {
             }
         })
     }
+}
+
+/// The largest image accepted, in pixels (a 16k × 16k render).
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+/// Checks what serde cannot: a field of view below 180° and an image size
+/// that fits in memory. `fov_path` and `film_path` name the keys in the file.
+pub(super) fn check_view(
+    file: &Path,
+    camera: &CameraDesc,
+    film: &FilmDesc,
+    fov_path: &str,
+    film_path: &str,
+) -> Result<()> {
+    if camera.fov.0 >= 180.0 {
+        return Err(Error::scene(
+            file,
+            fov_path,
+            format!("expected less than 180 degrees, found {}", camera.fov.0),
+        ));
+    }
+    let (w, h) = (film.width.0, film.height.0);
+    if w as u64 * h as u64 > MAX_PIXELS {
+        return Err(Error::scene(
+            file,
+            film_path,
+            format!("{w} x {h} is too large (at most {MAX_PIXELS} pixels)"),
+        ));
+    }
+    Ok(())
 }
 
 /// The largest icosphere level accepted: 20 × 4^10 ≈ 21 M triangles.

@@ -19,9 +19,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// The largest image accepted, in pixels (a 16k × 16k render).
-const MAX_PIXELS: u64 = 1 << 28;
-
 /// Reads a scene file (`.json`, or `.trs` for T-racer scenes) into a description.
 pub fn parse_file(path: &Path) -> Result<SceneDesc> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -63,21 +60,8 @@ pub fn load_desc(desc: SceneDesc) -> Result<Scene> {
     let err = |path: &str, msg: String| Error::scene(file, path, msg);
 
     let (width, height) = (desc.film.width.0, desc.film.height.0);
-    if width as u64 * height as u64 > MAX_PIXELS {
-        return Err(err(
-            "film",
-            format!("{width} x {height} is too large (at most {MAX_PIXELS} pixels)"),
-        ));
-    }
-    if desc.camera.fov.0 >= 180.0 {
-        return Err(err(
-            "camera.fov",
-            format!(
-                "expected less than 180 degrees, found {}",
-                desc.camera.fov.0
-            ),
-        ));
-    }
+    // The parsers check these with their own key names; descriptions built in code get checked here.
+    format::check_view(file, &desc.camera, &desc.film, "camera.fov", "film")?;
     let camera = make_camera(&desc.camera, width, height).ok_or_else(|| {
         err(
             "camera",
@@ -247,7 +231,9 @@ impl Builder<'_> {
                                 .push(format!("{path}: {e}; using Kd instead"));
                             Albedo::Constant(kd)
                         }
-                        (Err(e), None) => return Err(Error::scene(self.file, path, e)),
+                        (Err(e), None) => {
+                            return Err(Error::scene(self.file, format!("{path}.albedo"), e))
+                        }
                     },
                 },
             },
@@ -384,8 +370,14 @@ impl Builder<'_> {
         for f in mesh.indices.chunks_exact(3) {
             let [a, b, c] = [f[0] as usize, f[1] as usize, f[2] as usize];
             let tri = Triangle::new(world[a], world[b], world[c]);
-            let area = tri.area();
-            if !(area > 0.0 && area.is_finite()) {
+            // In double precision: a huge triangle's area overflows f32 but is not degenerate.
+            let (p0, p1, p2) = (
+                tri.v[0].as_dvec3(),
+                tri.v[1].as_dvec3(),
+                tri.v[2].as_dvec3(),
+            );
+            let area = (p1 - p0).cross(p2 - p0).length();
+            if !(area > 0.0 && tri.v.iter().all(|v| v.is_finite())) {
                 self.report.degenerate_triangles_dropped += 1;
                 continue;
             }

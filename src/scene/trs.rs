@@ -25,15 +25,9 @@ use std::path::{Path, PathBuf};
 pub const LIGHT_MATERIAL: &str = "trs-light";
 
 pub fn parse(text: &str, file: &Path) -> Result<SceneDesc> {
-    let root: Value = serde_json::from_str(text).map_err(|e| Error::Syntax {
-        file: file.to_path_buf(),
-        line: e.line(),
-        column: e.column(),
-        message: e
-            .to_string()
-            .rsplit_once(" at line ")
-            .map_or(e.to_string(), |(m, _)| m.to_string()),
-    })?;
+    let mut de = serde_json::Deserializer::from_str(text);
+    let root: Value = serde_path_to_error::deserialize(&mut de)
+        .map_err(|e| super::format::json_error(file, e))?;
     let err = |path: &str, msg: String| Error::scene(file, path, msg);
     let Value::Object(members) = root else {
         return Err(err(

@@ -1,0 +1,101 @@
+//! A diffuse plane lit by one delta light has closed-form radiance,
+//! L = ρ/π · E, with the irradiance E of each light type:
+//! point I·cos θ/d², spot the same times its falloff, directional E·cos θ.
+//! Each pixel is compared with that radiance averaged over the pixel's area
+//! (the box filter), integrated numerically through the same camera.
+
+mod common;
+
+use common::write_scene;
+use glam::Vec3;
+use std::f32::consts::PI;
+use tracer::render::{render, RenderOptions};
+
+const ALBEDO: f32 = 0.6;
+
+fn check(lights_json: &str, irradiance: impl Fn(Vec3) -> Vec3) {
+    let dir = tempfile::tempdir().unwrap();
+    let json = format!(
+        r#"{{
+          "camera": {{"position": [0, 4, 0], "look_at": [0, 0, 0], "up": [0, 0, 1], "fov": 70}},
+          "film": {{"width": 24, "height": 16}},
+          "render": {{"spp": 64, "max_depth": 2}},
+          "materials": {{"m": {{"type": "diffuse", "albedo": [{ALBEDO}, {ALBEDO}, {ALBEDO}]}}}},
+          "objects": [{{"type": "quad", "material": "m", "transform": {{"scale": 100}}}}],
+          "lights": [{lights_json}]
+        }}"#
+    );
+    let path = write_scene(dir.path(), "plane.json", &json);
+    let scene = tracer::scene::load(&path).unwrap();
+    let (image, _) = render(&scene, &RenderOptions::default()).unwrap();
+    const SUB: usize = 16;
+    let mut expected_image = Vec::new();
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let mut expected = Vec3::ZERO;
+            for i in 0..SUB {
+                for j in 0..SUB {
+                    let ray = scene.camera.ray(
+                        x as f32 + (i as f32 + 0.5) / SUB as f32,
+                        y as f32 + (j as f32 + 0.5) / SUB as f32,
+                    );
+                    let p = ray.at(-ray.origin.y / ray.dir.y);
+                    expected += ALBEDO / PI * irradiance(p);
+                }
+            }
+            expected_image.push(expected / (SUB * SUB) as f32);
+        }
+    }
+    // Relative error, except in pixels far darker than the peak (the spot's
+    // dim edge), where 1% of the peak is the yardstick.
+    let peak = expected_image
+        .iter()
+        .map(|e| e.max_element())
+        .fold(0.0, f32::max);
+    assert!(peak > 0.0);
+    for (k, (&got, &expected)) in image.pixels.iter().zip(&expected_image).enumerate() {
+        let error = (got - expected).abs().max_element() / expected.max_element().max(0.01 * peak);
+        assert!(
+            error < 0.01,
+            "pixel {k}: rendered {got}, expected {expected}"
+        );
+    }
+}
+
+#[test]
+fn point_light_on_a_plane() {
+    let (pos, intensity) = (Vec3::new(1.0, 2.0, 0.5), Vec3::new(10.0, 5.0, 2.0));
+    check(
+        r#"{"type": "point", "position": [1, 2, 0.5], "intensity": [10, 5, 2]}"#,
+        |p| {
+            let d = pos - p;
+            intensity * d.y / d.length().powi(3)
+        },
+    );
+}
+
+#[test]
+fn spot_light_on_a_plane() {
+    // Cone edge at 40°, falloff from 20°: both the full and the ramp region land on the plane.
+    let (pos, intensity) = (Vec3::new(0.2, 3.0, -0.1), Vec3::new(20.0, 20.0, 10.0));
+    let (cos_cone, cos_start) = (40f32.to_radians().cos(), 20f32.to_radians().cos());
+    check(
+        r#"{"type": "spot", "position": [0.2, 3, -0.1], "look_at": [0.2, 0, -0.1], "intensity": [20, 20, 10],
+            "cone_angle": 40, "falloff_start": 20}"#,
+        |p| {
+            let d = pos - p;
+            let cos_axis = d.y / d.length();
+            let t = ((cos_axis - cos_cone) / (cos_start - cos_cone)).clamp(0.0, 1.0);
+            intensity * (t * t * (3.0 - 2.0 * t)) * d.y / d.length().powi(3)
+        },
+    );
+}
+
+#[test]
+fn directional_light_on_a_plane() {
+    let direction = Vec3::new(0.3, -1.0, 0.2).normalize();
+    check(
+        r#"{"type": "directional", "direction": [0.3, -1, 0.2], "irradiance": [2, 1, 0.5]}"#,
+        |_| Vec3::new(2.0, 1.0, 0.5) * -direction.y,
+    );
+}
