@@ -6,11 +6,13 @@ pub fn power_heuristic(own: f32, other: f32) -> f32 {
     if own.is_infinite() {
         return 1.0;
     }
-    let (a, b) = (own * own, other * other);
-    if a + b <= 0.0 || !(a + b).is_finite() {
+    // Divide by the larger density first so the squares cannot overflow.
+    let largest = own.max(other);
+    if largest.is_nan() || largest <= 0.0 || largest.is_infinite() {
         return if own >= other { 1.0 } else { 0.0 };
     }
-    a / (a + b)
+    let (a, b) = (own / largest, other / largest);
+    a * a / (a * a + b * b)
 }
 
 #[cfg(test)]
