@@ -55,6 +55,40 @@ impl Camera {
         self.forward
     }
 
+    /// Distance from the pinhole to an image plane whose pixels are one unit
+    /// wide. Densities on that plane are "per pixel", which makes the box
+    /// filter of the contract and light-tracing splats agree (Georgiev 2012, §5.1).
+    pub fn image_plane_distance(&self) -> f32 {
+        self.height as f32 / (2.0 * self.tan_half_fov)
+    }
+
+    /// Solid-angle density of the camera choosing direction `dir` when each
+    /// pixel's point is uniform in the pixel: (distance to the image point)² / cos.
+    pub fn direction_pdf(&self, dir: Vec3) -> f32 {
+        let cos = dir.dot(self.forward);
+        if cos <= 0.0 {
+            return 0.0;
+        }
+        let d = self.image_plane_distance() / cos;
+        d * d / cos
+    }
+
+    /// The image point (pixels, y downwards) that `p` projects to, if it is in
+    /// front of the camera and inside the image.
+    pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
+        let d = p - self.position;
+        let z = d.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let scale = self.image_plane_distance() / z;
+        let x = 0.5 * self.width as f32 + d.dot(self.right) * scale;
+        let y = 0.5 * self.height as f32 - d.dot(self.up) * scale;
+        let inside =
+            (0.0..self.width as f32).contains(&x) && (0.0..self.height as f32).contains(&y);
+        inside.then_some((x, y))
+    }
+
     /// The ray through the image point (`x`, `y`) in pixel units, y downwards.
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let aspect = self.width as f32 / self.height as f32;
@@ -79,5 +113,54 @@ mod tests {
         assert!(c.ray(50.0, 0.0).dir.y > 0.0, "top row looks up");
         // 90° vertical fov: the top edge is 45° up.
         assert!((c.ray(50.0, 0.0).dir.angle_between(Vec3::Z).to_degrees() - 45.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn projection_inverts_camera_rays() {
+        let c = Camera::new(
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(0.0, 1.5, 7.0),
+            Vec3::Y,
+            50.0,
+            64,
+            48,
+        )
+        .unwrap();
+        for (x, y) in [(0.5, 0.5), (63.2, 10.0), (32.0, 24.0), (5.0, 47.9)] {
+            let ray = c.ray(x, y);
+            let (px, py) = c.project(ray.at(3.7)).unwrap();
+            assert!(
+                (px - x).abs() < 1e-3 && (py - y).abs() < 1e-3,
+                "({x}, {y}) -> ({px}, {py})"
+            );
+        }
+        assert!(
+            c.project(c.position - c.forward()).is_none(),
+            "behind the camera"
+        );
+    }
+
+    /// The direction pdf integrates to the image's pixel count over the
+    /// frustum: one unit of density per pixel.
+    #[test]
+    fn direction_pdf_counts_pixels() {
+        let c = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 60.0, 40, 30).unwrap();
+        let n = 400;
+        let mut integral = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let (x, y) = (
+                    40.0 * (i as f32 + 0.5) / n as f32,
+                    30.0 * (j as f32 + 0.5) / n as f32,
+                );
+                let dir = c.ray(x, y).dir;
+                // Solid angle of this little image cell: area × cos / dist² on the image plane.
+                let cos = dir.dot(c.forward());
+                let dist = c.image_plane_distance() / cos;
+                let cell = (40.0 / n as f32) * (30.0 / n as f32) * cos / (dist * dist);
+                integral += (c.direction_pdf(dir) * cell) as f64;
+            }
+        }
+        assert!((integral - 1200.0).abs() < 1.0, "{integral}");
     }
 }

@@ -39,3 +39,12 @@ impl Image {
         (sum / self.pixels.len().max(1) as f64).as_vec3()
     }
 }
+
+/// A contribution that lands in a pixel chosen by projection (light tracing
+/// and BDPT's t = 1 strategy), not in the pixel whose sample made it.
+#[derive(Clone, Copy, Debug)]
+pub struct Splat {
+    /// Row-major pixel index.
+    pub pixel: u32,
+    pub value: Rgb,
+}

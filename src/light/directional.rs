@@ -11,8 +11,9 @@ pub struct DirectionalLight {
     /// Unit direction the light travels in.
     pub direction: Vec3,
     pub irradiance: Rgb,
-    /// Radius of a sphere that bounds the scene: the beam that matters is a
-    /// disk of this radius, which sets the light's power.
+    /// A sphere that bounds the scene: the beam that matters is a disk of
+    /// this radius, which sets the light's power and where light paths start.
+    pub scene_center: Vec3,
     pub scene_radius: f32,
 }
 

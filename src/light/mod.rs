@@ -6,12 +6,14 @@
 
 mod area;
 mod directional;
+mod emission;
 mod point;
 mod selection;
 mod spot;
 
 pub use area::AreaLight;
 pub use directional::DirectionalLight;
+pub use emission::{EmissionSample, LightPdfs};
 pub use point::PointLight;
 pub use selection::LightSelector;
 pub use spot::SpotLight;

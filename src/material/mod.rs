@@ -163,16 +163,47 @@ impl Bsdf {
     }
 
     /// Solid-angle density with which [`Bsdf::sample`] picks `wi`; zero for delta lobes.
-    pub fn pdf(&self, _wo: Vec3, wi: Vec3) -> f32 {
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdfs(wo, wi).0
+    }
+
+    /// Densities of sampling `wi` given `wo`, and of `wo` given `wi` (the
+    /// reverse direction that BDPT's MIS weights need); zero for delta lobes.
+    pub fn pdfs(&self, wo: Vec3, wi: Vec3) -> (f32, f32) {
         match self.kind {
-            BsdfKind::Diffuse { .. } if wi.dot(self.ng) > 0.0 => {
-                diffuse::pdf(self.frame.to_local(wi))
-            }
-            _ => 0.0,
+            BsdfKind::Diffuse { .. } if wi.dot(self.ng) > 0.0 => (
+                diffuse::pdf(self.frame.to_local(wi)),
+                diffuse::pdf(self.frame.to_local(wo)),
+            ),
+            _ => (0.0, 0.0),
         }
     }
 
+    /// Like [`Bsdf::eval`], for light flowing from `wi` to `wo` (radiance) or
+    /// from `wo` to `wi` (importance, on light paths). For importance the
+    /// cosine factor carries the correction that keeps shading normals
+    /// consistent in the adjoint direction: f · |wo·ns| |wi·ng| / |wo·ng|
+    /// (Veach's thesis, eq. 5.19).
+    pub fn eval_mode(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
+        let value = self.eval(wo, wi);
+        match mode {
+            Transport::Radiance => value,
+            Transport::Importance => value * self.shading_correction(wo, wi),
+        }
+    }
+
+    /// |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|): one unless the normals differ.
+    fn shading_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let denominator = wo.dot(self.ng).abs() * wi.dot(self.frame.n).abs();
+        if denominator <= 0.0 {
+            return 0.0;
+        }
+        wo.dot(self.frame.n).abs() * wi.dot(self.ng).abs() / denominator
+    }
+
     /// Samples an incident direction; `u` picks the direction, `u_lobe` the lobe.
+    /// On light paths (`Transport::Importance`) the weight includes the
+    /// shading-normal correction of [`Bsdf::eval_mode`].
     pub fn sample(
         &self,
         wo: Vec3,
@@ -195,6 +226,10 @@ impl Bsdf {
         if (wi.dot(self.ng) > 0.0) != reflected {
             return None;
         }
+        let weight = match mode {
+            Transport::Radiance => weight,
+            Transport::Importance => weight * self.shading_correction(wo, wi),
+        };
         Some(BsdfSample {
             wi,
             weight,

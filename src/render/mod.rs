@@ -3,6 +3,11 @@
 //! Tiles are scheduled over rayon, one tile per thread at a time; each tile
 //! owns its pixels, so no locks are taken, and a pixel's samples are a pure
 //! function of the seed, so the image is the same for any thread count.
+//!
+//! Light tracing and BDPT also splat into pixels other tiles own. Each tile
+//! collects its splats in a list of its own, and the lists are added to the
+//! image in tile order: no locks in the hot path, and the same sums in the
+//! same order for any thread count. Tiles run in batches so the lists stay small.
 
 mod progress;
 mod tiles;
@@ -11,14 +16,23 @@ pub use tiles::{Tile, TILE_SIZE};
 
 use crate::color::{is_finite, Rgb};
 use crate::film::Image;
-use crate::integrator::pt;
+use crate::film::Splat;
+use crate::integrator::{bdpt, lt, pt};
 use crate::sampling::Sampler;
 use crate::scene::desc::IntegratorKind;
 use crate::scene::Scene;
 use crate::{Error, Result};
+use glam::DVec3;
 use progress::Progress;
 use rayon::prelude::*;
 use std::time::Instant;
+
+/// Tiles per batch for the splatting integrators: bounds the splat lists held
+/// at once (a few MB) while leaving enough tiles to keep every thread busy.
+const SPLAT_BATCH: usize = 64;
+
+/// Light paths draw from a sequence of their own, independent of camera paths.
+const LIGHT_SEED_DOMAIN: u64 = 0x9e37_79b9_7f4a_7c15;
 
 #[derive(Clone, Debug, Default)]
 pub struct RenderOptions {
@@ -53,12 +67,6 @@ fn pass_size(k: u32) -> u32 {
 
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Image, RenderStats)> {
     let settings = &scene.settings;
-    if settings.integrator != IntegratorKind::Pt {
-        return Err(Error::Unsupported(format!(
-            "the {:?} integrator is not available yet; use --integrator pt",
-            settings.integrator
-        )));
-    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.threads.unwrap_or(0))
         .build()
@@ -69,16 +77,33 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Image, RenderSt
     let progress = Progress::new(options.progress, pixels * settings.spp as u64);
     let start = Instant::now();
     let mut stats = RenderStats::default();
+    let splatting = settings.integrator != IntegratorKind::Pt;
+    let mut splat_sums = vec![DVec3::ZERO; if splatting { pixels as usize } else { 0 }];
+    let batch = if splatting {
+        SPLAT_BATCH
+    } else {
+        tiles.len().max(1)
+    };
 
     while stats.spp < settings.spp {
         let first = stats.spp;
         let count = pass_size(stats.passes).min(settings.spp - first);
-        pool.install(|| {
-            tiles.par_iter_mut().for_each(|tile| {
-                render_tile(scene, tile, first, count);
-                progress.advance(tile.pixel_count() as u64 * count as u64);
-            })
-        });
+        for tiles in tiles.chunks_mut(batch) {
+            let lists: Vec<Vec<Splat>> = pool.install(|| {
+                tiles
+                    .par_iter_mut()
+                    .map(|tile| {
+                        let mut splats = Vec::new();
+                        render_tile(scene, tile, first, count, &mut splats);
+                        progress.advance(tile.pixel_count() as u64 * count as u64);
+                        splats
+                    })
+                    .collect()
+            });
+            for splat in lists.iter().flatten() {
+                splat_sums[splat.pixel as usize] += splat.value.as_dvec3();
+            }
+        }
         stats.spp += count;
         stats.passes += 1;
         if settings
@@ -97,20 +122,61 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Image, RenderSt
     for tile in &tiles {
         tile.resolve_into(&mut image, stats.spp);
     }
+    if splatting {
+        let scale = 1.0 / stats.spp.max(1) as f64;
+        for (pixel, sum) in image.pixels.iter_mut().zip(&splat_sums) {
+            *pixel += (*sum * scale).as_vec3();
+        }
+    }
     Ok((image, stats))
 }
 
-/// Adds samples `first .. first + count` to every pixel of `tile`.
-fn render_tile(scene: &Scene, tile: &mut Tile, first: u32, count: u32) {
+/// Adds samples `first .. first + count` to every pixel of `tile`, pushing
+/// any splats the integrator makes.
+fn render_tile(scene: &Scene, tile: &mut Tile, first: u32, count: u32, splats: &mut Vec<Splat>) {
     let s = &scene.settings;
+    let light_seed = s.seed ^ LIGHT_SEED_DOMAIN;
+    let mut buffers = bdpt::BdptBuffers::default();
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             let mut sum = glam::DVec3::ZERO;
             for index in first..first + count {
-                let mut sampler = Sampler::new(s.seed, x, y, index as u64);
-                let (jx, jy) = sampler.next_2d();
-                let ray = scene.camera.ray(x as f32 + jx, y as f32 + jy);
-                let l: Rgb = pt::radiance(scene, ray, &mut sampler, s.max_depth);
+                let index = index as u64;
+                let l: Rgb = match s.integrator {
+                    IntegratorKind::Pt => {
+                        let mut sampler = Sampler::new(s.seed, x, y, index);
+                        let (jx, jy) = sampler.next_2d();
+                        let ray = scene.camera.ray(x as f32 + jx, y as f32 + jy);
+                        pt::radiance(scene, ray, &mut sampler, s.max_depth)
+                    }
+                    IntegratorKind::Lt => {
+                        let mut sampler = Sampler::new(light_seed, x, y, index);
+                        lt::sample(
+                            scene,
+                            &mut sampler,
+                            s.max_depth,
+                            splats,
+                            &mut tile.discarded,
+                        );
+                        Rgb::ZERO
+                    }
+                    IntegratorKind::Bdpt => {
+                        let mut camera = Sampler::new(s.seed, x, y, index);
+                        let mut light = Sampler::new(light_seed, x, y, index);
+                        let (jx, jy) = camera.next_2d();
+                        bdpt::sample(
+                            scene,
+                            x as f32 + jx,
+                            y as f32 + jy,
+                            &mut camera,
+                            &mut light,
+                            s.max_depth,
+                            &mut buffers,
+                            splats,
+                            &mut tile.discarded,
+                        )
+                    }
+                };
                 if is_finite(l) {
                     sum += l.as_dvec3();
                 } else {

@@ -187,6 +187,7 @@ fn make_light(l: &LightDesc, bounds: &Aabb) -> Light {
         } => Light::Directional(DirectionalLight {
             direction: direction.normalize(),
             irradiance,
+            scene_center: bounds.bounding_sphere().0,
             scene_radius: bounds.bounding_sphere().1,
         }),
     }

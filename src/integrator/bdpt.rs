@@ -1,0 +1,218 @@
+//! Bidirectional path tracing (Veach and Guibas 1995; Lafortune and Willems
+//! 1993) with every connection strategy weighted by the power heuristic.
+//!
+//! Each sample traces a light subpath (splatting its t = 1 connections to the
+//! camera, see `subpath.rs`) and a camera subpath, whose vertices take the
+//! remaining strategies: s = 0 (the camera path hits an emitter), s = 1
+//! (a point sampled on a light) and s > 1 (a connection to each stored light
+//! vertex). The weights come from the running quantities of Georgiev's report
+//! in constant time per connection; equation numbers below are the report's.
+//!
+//! A path of `k` segments is produced by every strategy with s + t − 1 = k,
+//! and `max_depth` bounds k for all of them alike, so the weights of a path
+//! always sum to one. Strategies a path cannot use get zero weight by
+//! construction: a delta light has `d_vc = 0` (nothing can hit it), a delta
+//! BSDF vertex has `d_vcm = 0` (nothing can connect to it), and the
+//! light point seen directly (s = 1, t = 1) is left to s = 0.
+
+use super::subpath::{mis, trace_light_path, visible, LightVertex, Walk};
+use crate::color::{is_black, Rgb};
+use crate::film::Splat;
+use crate::geometry::Ray;
+use crate::light::Light;
+use crate::material::{Bsdf, SurfacePoint, Transport};
+use crate::sampling::Sampler;
+use crate::scene::{Scene, NO_LIGHT};
+use glam::Vec3;
+
+/// Buffers one thread reuses from sample to sample.
+#[derive(Default)]
+pub struct BdptBuffers {
+    pub light_vertices: Vec<LightVertex>,
+}
+
+/// One BDPT sample through image point (`x`, `y`): returns the camera-side
+/// estimate for its pixel and pushes the light-side splats.
+#[allow(clippy::too_many_arguments)]
+pub fn sample(
+    scene: &Scene,
+    x: f32,
+    y: f32,
+    camera_sampler: &mut Sampler,
+    light_sampler: &mut Sampler,
+    max_depth: u32,
+    buffers: &mut BdptBuffers,
+    splats: &mut Vec<Splat>,
+    discarded: &mut u64,
+) -> Rgb {
+    buffers.light_vertices.clear();
+    trace_light_path(
+        scene,
+        light_sampler,
+        max_depth,
+        false,
+        Some(&mut buffers.light_vertices),
+        splats,
+        discarded,
+    );
+
+    let ray = scene.camera.ray(x, y);
+    let paths = super::subpath::light_paths_per_pass(scene);
+    let camera_pdf = scene.camera.direction_pdf(ray.dir);
+    if camera_pdf <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let mut walk = Walk {
+        origin: ray.origin,
+        dir: ray.dir,
+        throughput: Rgb::ONE,
+        length: 1,
+        // Eq. 31 for the camera: the light tracer's density relative to this one.
+        d_vcm: mis(paths / camera_pdf),
+        d_vc: 0.0,
+        finite_start: true,
+    };
+    let mut result = Rgb::ZERO;
+    loop {
+        camera_sampler.start_vertex();
+        let ray = Ray::new(walk.origin, walk.dir);
+        let Some(hit) = scene.intersect(&ray) else {
+            break;
+        };
+        let surface = scene.surface(&hit);
+        let wo = -ray.dir;
+        walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
+        let shading = scene.shading[hit.triangle as usize];
+
+        if shading.light != NO_LIGHT {
+            result += walk.throughput * hit_emitter(scene, shading.light as usize, wo, &walk);
+        }
+        if walk.length >= max_depth {
+            break;
+        }
+        let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
+        if !bsdf.is_delta() {
+            result +=
+                walk.throughput * light_sample(scene, &surface, &bsdf, wo, &walk, camera_sampler);
+            for v in &buffers.light_vertices {
+                if v.length + 1 + walk.length > max_depth {
+                    break;
+                }
+                result +=
+                    walk.throughput * v.throughput * connect(scene, &surface, &bsdf, wo, &walk, v);
+            }
+        }
+        if !walk.scatter(&bsdf, &surface, wo, camera_sampler, Transport::Radiance) {
+            break;
+        }
+        walk.length += 1;
+    }
+    result
+}
+
+/// s = 0: the camera path has reached an emitter (eq. 43).
+fn hit_emitter(scene: &Scene, light: usize, wo: Vec3, walk: &Walk) -> Rgb {
+    let Light::Area(area) = &scene.lights[light] else {
+        return Rgb::ZERO;
+    };
+    let emitted = area.emitted(wo);
+    if is_black(emitted) {
+        return Rgb::ZERO;
+    }
+    if walk.length == 1 {
+        // Seen directly: no other strategy makes this path.
+        return emitted;
+    }
+    let pick = scene.light_selector.pmf(light);
+    let (direct_pdf, emission_pdf) = area.pdfs_for_hit(wo);
+    let w_camera = mis(direct_pdf * pick) * walk.d_vcm + mis(emission_pdf * pick) * walk.d_vc;
+    emitted / (1.0 + w_camera)
+}
+
+/// s = 1: a point chosen on a light, connected to the camera vertex (eq. 44).
+fn light_sample(
+    scene: &Scene,
+    surface: &SurfacePoint,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    walk: &Walk,
+    sampler: &mut Sampler,
+) -> Rgb {
+    let u_select = sampler.next_1d();
+    let u_point = sampler.next_2d();
+    let Some((index, pick)) = scene.light_selector.sample(u_select) else {
+        return Rgb::ZERO;
+    };
+    let light = &scene.lights[index];
+    let Some(sample) = light.sample_incident(surface.position, u_point) else {
+        return Rgb::ZERO;
+    };
+    let f = bsdf.eval(wo, sample.wi);
+    if is_black(f) {
+        return Rgb::ZERO;
+    }
+    let pdfs = light.pdfs_for_incident(sample.wi, sample.distance, sample.normal, sample.pdf);
+    let (bsdf_pdf, reverse_pdf) = bsdf.pdfs(wo, sample.wi);
+    // BSDF sampling can never hit a delta light.
+    let bsdf_pdf = if light.is_delta() { 0.0 } else { bsdf_pdf };
+    let cos_receiver = sample.wi.dot(surface.geometric_normal).abs();
+    let w_light = mis(bsdf_pdf / (pick * pdfs.direct));
+    let w_camera = mis(pdfs.emission * cos_receiver / (pdfs.direct * pdfs.cos_light))
+        * (walk.d_vcm + walk.d_vc * mis(reverse_pdf));
+    let weight = 1.0 / (w_light + 1.0 + w_camera);
+    let contribution = f * sample.value * (weight / (pick * sample.pdf));
+    if is_black(contribution) || !super::pt::unoccluded(scene, surface, &sample) {
+        return Rgb::ZERO;
+    }
+    contribution
+}
+
+/// s > 1, t > 1: the camera vertex joined to a stored light vertex (eq. 45).
+/// Returns the contribution without the two subpaths' throughputs.
+fn connect(
+    scene: &Scene,
+    surface: &SurfacePoint,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    walk: &Walk,
+    v: &LightVertex,
+) -> Rgb {
+    let to_light = v.surface.position - surface.position;
+    let distance2 = to_light.length_squared();
+    if distance2 <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let distance = distance2.sqrt();
+    let dir = to_light / distance;
+    let camera_f = bsdf.eval(wo, dir);
+    if is_black(camera_f) {
+        return Rgb::ZERO;
+    }
+    let light_f = v.bsdf.eval_mode(v.wo, -dir, Transport::Importance);
+    if is_black(light_f) {
+        return Rgb::ZERO;
+    }
+    let (camera_pdf, camera_reverse) = bsdf.pdfs(wo, dir);
+    let (light_pdf, light_reverse) = v.bsdf.pdfs(v.wo, -dir);
+    let cos_camera = dir.dot(surface.geometric_normal).abs();
+    let cos_light = dir.dot(v.surface.geometric_normal).abs();
+    // Solid-angle densities turned into area densities at the other end.
+    let camera_pdf_area = camera_pdf * cos_light / distance2;
+    let light_pdf_area = light_pdf * cos_camera / distance2;
+    let w_light = mis(camera_pdf_area) * (v.d_vcm + v.d_vc * mis(light_reverse));
+    let w_camera = mis(light_pdf_area) * (walk.d_vcm + walk.d_vc * mis(camera_reverse));
+    let weight = 1.0 / (w_light + 1.0 + w_camera);
+    let contribution = camera_f * light_f * (weight / distance2);
+    if is_black(contribution)
+        || !visible(
+            scene,
+            surface.position,
+            surface.geometric_normal,
+            v.surface.position,
+            v.surface.geometric_normal,
+        )
+    {
+        return Rgb::ZERO;
+    }
+    contribution
+}
