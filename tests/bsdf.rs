@@ -19,6 +19,7 @@ fn surface(ng: Vec3, ns: Vec3) -> SurfacePoint {
         geometric_normal: ng,
         shading_normal: ns,
         uv: Vec2::ZERO,
+        magnitude: 1.0,
     }
 }
 

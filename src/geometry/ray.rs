@@ -37,33 +37,32 @@ impl Ray {
     }
 }
 
-/// Moves a surface point off its surface, to the side `toward` lies on, by a
-/// few units in the last place of its coordinates.
+/// Moves a surface point off its surface, to the side `toward` lies on, so a
+/// ray leaving it cannot hit that surface again, and a shadow ray ending at it
+/// cannot stop on that surface early.
 ///
-/// This is the method of Wächter and Binder, "A Fast and Robust Method for
-/// Avoiding Self-Intersection" (Ray Tracing Gems, ch. 6): the offset scales with
-/// the magnitude of the coordinates, so it works at any scene scale without a
-/// global epsilon on `t`, and it moves along the geometric normal, so a ray that
-/// leaves at a grazing angle still clears the surface.
-pub fn offset_origin(p: Vec3, geometric_normal: Vec3, toward: Vec3) -> Vec3 {
-    // Below this magnitude integer ULP steps get too small, so add a fixed amount.
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
-
+/// The ray–triangle test decides which side of a plane a point is on with an
+/// error of a few ULPs of the largest coordinate involved, which is the
+/// largest coordinate of the triangle's vertices (`magnitude`), not of the
+/// point alone. So the point moves along the geometric normal by 2^-16 of
+/// that magnitude (about 128 ULPs). Offsetting each coordinate by ULPs of
+/// itself (Wächter and Binder, *Ray Tracing Gems* ch. 6) is not enough: on a
+/// floor at y = 0 far from the origin, y's ULPs are tiny while the test's
+/// error follows x and z, and grazing shadow rays then stop on the floor.
+/// The offset is relative, so it works at any scene scale with no epsilon on `t`.
+pub fn offset_origin(p: Vec3, geometric_normal: Vec3, toward: Vec3, magnitude: f32) -> Vec3 {
+    const RELATIVE: f32 = 1.0 / 65536.0;
     let n = if geometric_normal.dot(toward) < 0.0 {
         -geometric_normal
     } else {
         geometric_normal
     };
-    let step = |p: f32, n: f32| -> f32 {
-        if p.abs() < ORIGIN {
-            return p + FLOAT_SCALE * n;
-        }
-        let ulps = (INT_SCALE * n) as i32;
-        let bits = p.to_bits() as i32;
-        let moved = if p < 0.0 { bits - ulps } else { bits + ulps };
-        f32::from_bits(moved as u32)
-    };
-    Vec3::new(step(p.x, n.x), step(p.y, n.y), step(p.z, n.z))
+    let scale = magnitude.max(p.abs().max_element()).max(f32::MIN_POSITIVE);
+    p + n * (scale * RELATIVE)
+}
+
+/// The largest absolute coordinate of a triangle: the scale of the rounding
+/// errors of ray tests against it, for [`offset_origin`].
+pub fn magnitude(v: &[Vec3; 3]) -> f32 {
+    v[0].abs().max(v[1].abs()).max(v[2].abs()).max_element()
 }

@@ -15,7 +15,7 @@
 //! BSDF vertex has `d_vcm = 0` (nothing can connect to it), and the
 //! light point seen directly (s = 1, t = 1) is left to s = 0.
 
-use super::subpath::{mis, trace_light_path, visible, LightVertex, Walk};
+use super::subpath::{mis, trace_light_path, visible, Endpoint, LightVertex, Walk};
 use crate::color::{is_black, Rgb};
 use crate::film::Splat;
 use crate::geometry::Ray;
@@ -206,10 +206,8 @@ fn connect(
     if is_black(contribution)
         || !visible(
             scene,
-            surface.position,
-            surface.geometric_normal,
-            v.surface.position,
-            v.surface.geometric_normal,
+            Endpoint::surface(surface),
+            Endpoint::surface(&v.surface),
         )
     {
         return Rgb::ZERO;

@@ -74,7 +74,12 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         previous_delta = s.delta;
         previous_position = surface.position;
         ray = Ray::new(
-            offset_origin(surface.position, surface.geometric_normal, s.wi),
+            offset_origin(
+                surface.position,
+                surface.geometric_normal,
+                s.wi,
+                surface.magnitude,
+            ),
             s.wi,
         );
 
@@ -121,14 +126,19 @@ fn direct_light(
 /// Whether nothing blocks the segment from `surface` to the light sample.
 /// Both ends are moved off their surfaces, so neither can block itself.
 pub fn unoccluded(scene: &Scene, surface: &SurfacePoint, sample: &IncidentSample) -> bool {
-    let origin = offset_origin(surface.position, surface.geometric_normal, sample.wi);
+    let origin = offset_origin(
+        surface.position,
+        surface.geometric_normal,
+        sample.wi,
+        surface.magnitude,
+    );
     let ray = if sample.distance.is_infinite() {
         Ray::new(origin, sample.wi)
     } else {
         let target = if sample.normal == glam::Vec3::ZERO {
             sample.point
         } else {
-            offset_origin(sample.point, sample.normal, -sample.wi)
+            offset_origin(sample.point, sample.normal, -sample.wi, sample.magnitude)
         };
         let to_target = target - origin;
         let distance = to_target.length();

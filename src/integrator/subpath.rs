@@ -92,7 +92,12 @@ impl Walk {
             self.d_vcm = mis(1.0 / s.pdf);
         }
         self.throughput *= s.weight;
-        self.origin = offset_origin(surface.position, surface.geometric_normal, s.wi);
+        self.origin = offset_origin(
+            surface.position,
+            surface.geometric_normal,
+            s.wi,
+            surface.magnitude,
+        );
         self.dir = s.wi;
         if self.length >= ROULETTE_START {
             let survive = self.throughput.max_element().min(1.0);
@@ -126,7 +131,7 @@ pub fn start_light_walk(
     let origin = if e.normal == Vec3::ZERO {
         e.origin
     } else {
-        offset_origin(e.origin, e.normal, e.dir)
+        offset_origin(e.origin, e.normal, e.dir, e.magnitude)
     };
     let cos_used = if light.is_finite() { e.cos_light } else { 1.0 };
     let walk = Walk {
@@ -145,19 +150,48 @@ pub fn start_light_walk(
     Some((walk, index, e, pick))
 }
 
+/// A point a shadow ray can start or end at: its normal (zero for points
+/// not on a surface, such as the camera) and its triangle's coordinate
+/// magnitude, which sets how far it is moved off its surface.
+#[derive(Clone, Copy, Debug)]
+pub struct Endpoint {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub magnitude: f32,
+}
+
+impl Endpoint {
+    pub fn surface(s: &SurfacePoint) -> Endpoint {
+        Endpoint {
+            position: s.position,
+            normal: s.geometric_normal,
+            magnitude: s.magnitude,
+        }
+    }
+
+    pub fn point(position: Vec3) -> Endpoint {
+        Endpoint {
+            position,
+            normal: Vec3::ZERO,
+            magnitude: 0.0,
+        }
+    }
+
+    /// The position moved off its surface towards `toward`.
+    fn lifted(&self, toward: Vec3) -> Vec3 {
+        if self.normal == Vec3::ZERO {
+            self.position
+        } else {
+            offset_origin(self.position, self.normal, toward, self.magnitude)
+        }
+    }
+}
+
 /// Whether the segment between two points is free, each end moved off its surface.
-pub fn visible(scene: &Scene, from: Vec3, from_normal: Vec3, to: Vec3, to_normal: Vec3) -> bool {
-    let dir = to - from;
-    let origin = if from_normal == Vec3::ZERO {
-        from
-    } else {
-        offset_origin(from, from_normal, dir)
-    };
-    let target = if to_normal == Vec3::ZERO {
-        to
-    } else {
-        offset_origin(to, to_normal, -dir)
-    };
+pub fn visible(scene: &Scene, from: Endpoint, to: Endpoint) -> bool {
+    let dir = to.position - from.position;
+    let origin = from.lifted(dir);
+    let target = to.lifted(-dir);
     let d = target - origin;
     let distance = d.length();
     if distance.is_nan() || distance <= 0.0 {
@@ -248,10 +282,12 @@ pub fn trace_light_path(
                 if !is_black(le)
                     && visible(
                         scene,
-                        emission.origin,
-                        light.normal,
-                        scene.camera.position,
-                        Vec3::ZERO,
+                        Endpoint {
+                            position: emission.origin,
+                            normal: light.normal,
+                            magnitude: light.magnitude,
+                        },
+                        Endpoint::point(scene.camera.position),
                     )
                 {
                     let value = le * cos / (pick * emission.direct_pdf_area);
@@ -268,6 +304,10 @@ pub fn trace_light_path(
     }
 
     loop {
+        // A vertex here is walk.length segments from the light, and one more to the camera.
+        if walk.length + 1 > max_depth {
+            break;
+        }
         let ray = Ray::new(walk.origin, walk.dir);
         let Some(hit) = scene.intersect(&ray) else {
             break;
@@ -296,10 +336,8 @@ pub fn trace_light_path(
                 if !is_black(f)
                     && visible(
                         scene,
-                        surface.position,
-                        surface.geometric_normal,
-                        scene.camera.position,
-                        Vec3::ZERO,
+                        Endpoint::surface(&surface),
+                        Endpoint::point(scene.camera.position),
                     )
                 {
                     let weight = if light_tracing_only {

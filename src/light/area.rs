@@ -18,6 +18,8 @@ pub struct AreaLight {
     pub area: f32,
     pub radiance: Rgb,
     pub two_sided: bool,
+    /// Coordinate magnitude of the triangle, for ray offsets.
+    pub magnitude: f32,
 }
 
 impl AreaLight {
@@ -34,6 +36,7 @@ impl AreaLight {
             triangle_index,
             radiance,
             two_sided,
+            magnitude: crate::geometry::ray::magnitude(&triangle.v),
         }
     }
 
@@ -83,6 +86,7 @@ impl AreaLight {
             distance,
             point,
             normal: self.normal,
+            magnitude: self.magnitude,
             value,
             pdf: d2 / (cos_light * self.area),
             delta: false,

@@ -28,6 +28,7 @@ impl DirectionalLight {
             distance: f32::INFINITY,
             point: receiver - self.direction * f32::INFINITY,
             normal: Vec3::ZERO,
+            magnitude: 0.0,
             value: self.irradiance,
             pdf: 1.0,
             delta: true,

@@ -34,6 +34,8 @@ pub struct EmissionSample {
     pub cos_light: f32,
     /// The light's surface normal at `origin`, zero for lights that are not surfaces.
     pub normal: Vec3,
+    /// Coordinate magnitude of the light's triangle (for ray offsets); zero if none.
+    pub magnitude: f32,
 }
 
 /// Densities of the two light-side strategies for one light point and direction.
@@ -82,6 +84,7 @@ impl Light {
                 direct_pdf_area: 1.0,
                 cos_light: 1.0,
                 normal: Vec3::ZERO,
+                magnitude: 0.0,
             }),
             Light::Spot(l) => {
                 let local = uniform_cone(l.cos_cone, u_dir.0, u_dir.1);
@@ -94,6 +97,7 @@ impl Light {
                     direct_pdf_area: 1.0,
                     cos_light: 1.0,
                     normal: Vec3::ZERO,
+                    magnitude: 0.0,
                 })
             }
             Light::Directional(l) => {
@@ -109,6 +113,7 @@ impl Light {
                     direct_pdf_area: 1.0,
                     cos_light: 1.0,
                     normal: Vec3::ZERO,
+                    magnitude: 0.0,
                 })
             }
         }
@@ -193,6 +198,7 @@ impl AreaLight {
             direct_pdf_area: 1.0 / self.area,
             cos_light,
             normal: self.normal,
+            magnitude: self.magnitude,
         })
     }
 }

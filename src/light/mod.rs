@@ -40,6 +40,8 @@ pub struct IncidentSample {
     pub point: Vec3,
     /// The light's surface normal there; zero for lights that are not surfaces.
     pub normal: Vec3,
+    /// Coordinate magnitude of the light's triangle (for ray offsets); zero if none.
+    pub magnitude: f32,
     /// Radiance for area lights; for delta lights, the irradiance a surface
     /// facing the light receives (I / d² or E), so that in every case the
     /// contribution is `f · cos · value / pdf`.

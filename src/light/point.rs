@@ -28,6 +28,7 @@ impl PointLight {
             distance,
             point: self.position,
             normal: Vec3::ZERO,
+            magnitude: 0.0,
             value: self.intensity / d2,
             pdf: 1.0,
             delta: true,

@@ -58,6 +58,7 @@ impl SpotLight {
             distance,
             point: self.position,
             normal: Vec3::ZERO,
+            magnitude: 0.0,
             value: self.intensity * (scale / d2),
             pdf: 1.0,
             delta: true,

@@ -54,6 +54,8 @@ pub struct SurfacePoint {
     /// Unit interpolated shading normal, on the same side as the geometric normal.
     pub shading_normal: Vec3,
     pub uv: Vec2,
+    /// Largest coordinate magnitude of the surface's triangle, for ray offsets.
+    pub magnitude: f32,
 }
 
 #[derive(Clone, Copy, Debug)]

@@ -108,6 +108,7 @@ impl Scene {
             geometric_normal: ng,
             shading_normal: ns,
             uv: b0 * sh.uvs[0] + b1 * sh.uvs[1] + b2 * sh.uvs[2],
+            magnitude: crate::geometry::ray::magnitude(&tri.v),
         }
     }
 

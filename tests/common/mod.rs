@@ -61,3 +61,78 @@ pub fn write_scene(dir: &Path, name: &str, json: &str) -> PathBuf {
 pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
+
+/// Block means of several independent renders (seeds 0..`seeds`) and their
+/// standard errors: a noise estimate for comparing unbiased estimators with a
+/// tolerance derived from their variance, not a hand-picked constant.
+pub struct BlockStats {
+    pub blocks_x: u32,
+    pub blocks_y: u32,
+    /// Per block and channel: mean over seeds, and standard error of that mean.
+    pub mean: Vec<glam::DVec3>,
+    pub stderr: Vec<glam::DVec3>,
+    pub discarded: u64,
+}
+
+pub fn block_stats(scene: &mut tracer::scene::Scene, seeds: u64, block: u32) -> BlockStats {
+    use glam::DVec3;
+    let (w, h) = (scene.settings.width, scene.settings.height);
+    let (bx, by) = (w / block, h / block);
+    let n = (bx * by) as usize;
+    let mut sum = vec![DVec3::ZERO; n];
+    let mut sum2 = vec![DVec3::ZERO; n];
+    let mut discarded = 0;
+    for seed in 0..seeds {
+        scene.settings.seed = seed;
+        let (image, stats) = tracer::render::render(scene, &Default::default()).unwrap();
+        discarded += stats.discarded;
+        let mut blocks = vec![DVec3::ZERO; n];
+        for y in 0..by * block {
+            for x in 0..bx * block {
+                blocks[((y / block) * bx + x / block) as usize] += image.get(x, y).as_dvec3();
+            }
+        }
+        for (k, b) in blocks.iter().enumerate() {
+            let m = *b / (block * block) as f64;
+            sum[k] += m;
+            sum2[k] += m * m;
+        }
+    }
+    let k = seeds as f64;
+    let mean: Vec<DVec3> = sum.iter().map(|s| *s / k).collect();
+    let stderr = sum2
+        .iter()
+        .zip(&mean)
+        .map(|(s2, m)| ((*s2 / k - *m * *m).max(DVec3::ZERO) * (k / (k - 1.0)) / k).map(f64::sqrt))
+        .collect();
+    BlockStats {
+        blocks_x: bx,
+        blocks_y: by,
+        mean,
+        stderr,
+        discarded,
+    }
+}
+
+/// Asserts that two estimates agree in every block and channel within `z`
+/// combined standard errors (plus a hair for blocks that are exactly black).
+pub fn assert_agree(a: &BlockStats, b: &BlockStats, z: f64, what: &str) {
+    let mut worst = 0.0f64;
+    for k in 0..a.mean.len() {
+        for c in 0..3 {
+            let diff = (a.mean[k][c] - b.mean[k][c]).abs();
+            let sigma = (a.stderr[k][c].powi(2) + b.stderr[k][c].powi(2)).sqrt() + 1e-6;
+            worst = worst.max(diff / sigma);
+            assert!(
+                diff <= z * sigma,
+                "{what}: block ({}, {}) channel {c}: {:.5} vs {:.5}, {:.1} standard errors apart",
+                k as u32 % a.blocks_x,
+                k as u32 / a.blocks_x,
+                a.mean[k][c],
+                b.mean[k][c],
+                diff / sigma
+            );
+        }
+    }
+    eprintln!("{what}: largest difference {worst:.2} standard errors");
+}
