@@ -71,6 +71,10 @@ pub struct BlockStats {
     /// Per block and channel: mean over seeds, and standard error of that mean.
     pub mean: Vec<glam::DVec3>,
     pub stderr: Vec<glam::DVec3>,
+    /// The whole image's mean and its standard error: far tighter than any
+    /// block's, so it catches small biases spread over the image.
+    pub image_mean: glam::DVec3,
+    pub image_stderr: glam::DVec3,
     pub discarded: u64,
 }
 
@@ -82,6 +86,7 @@ pub fn block_stats(scene: &mut tracer::scene::Scene, seeds: u64, block: u32) -> 
     let mut sum = vec![DVec3::ZERO; n];
     let mut sum2 = vec![DVec3::ZERO; n];
     let mut discarded = 0;
+    let (mut image_sum, mut image_sum2) = (DVec3::ZERO, DVec3::ZERO);
     for seed in 0..seeds {
         scene.settings.seed = seed;
         let (image, stats) = tracer::render::render(scene, &Default::default()).unwrap();
@@ -97,19 +102,28 @@ pub fn block_stats(scene: &mut tracer::scene::Scene, seeds: u64, block: u32) -> 
             sum[k] += m;
             sum2[k] += m * m;
         }
+        let m = blocks.iter().sum::<DVec3>() / (n as u32 * block * block) as f64;
+        image_sum += m;
+        image_sum2 += m * m;
     }
     let k = seeds as f64;
+    let standard_error = |s2: DVec3, m: DVec3| {
+        ((s2 / k - m * m).max(DVec3::ZERO) * (k / (k - 1.0)) / k).map(f64::sqrt)
+    };
     let mean: Vec<DVec3> = sum.iter().map(|s| *s / k).collect();
     let stderr = sum2
         .iter()
         .zip(&mean)
-        .map(|(s2, m)| ((*s2 / k - *m * *m).max(DVec3::ZERO) * (k / (k - 1.0)) / k).map(f64::sqrt))
+        .map(|(s2, m)| standard_error(*s2, *m))
         .collect();
+    let image_mean = image_sum / k;
     BlockStats {
         blocks_x: bx,
         blocks_y: by,
         mean,
         stderr,
+        image_mean,
+        image_stderr: standard_error(image_sum2, image_mean),
         discarded,
     }
 }
@@ -133,6 +147,18 @@ pub fn assert_agree(a: &BlockStats, b: &BlockStats, z: f64, what: &str) {
                 diff / sigma
             );
         }
+    }
+    for c in 0..3 {
+        let diff = (a.image_mean[c] - b.image_mean[c]).abs();
+        let sigma = (a.image_stderr[c].powi(2) + b.image_stderr[c].powi(2)).sqrt() + 1e-9;
+        assert!(
+            diff <= z * sigma,
+            "{what}: image means differ in channel {c}: {:.5} vs {:.5} ({:.1} standard errors)",
+            a.image_mean[c],
+            b.image_mean[c],
+            diff / sigma
+        );
+        worst = worst.max(diff / sigma);
     }
     eprintln!("{what}: largest difference {worst:.2} standard errors");
 }
