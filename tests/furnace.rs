@@ -5,7 +5,6 @@
 mod common;
 
 use common::{block_stats, write_scene};
-use tracer::render::{render, RenderOptions};
 use tracer::scene::desc::IntegratorKind;
 
 /// Light tracing reaches a pixel only by splatting, so it needs more paths
