@@ -2,8 +2,8 @@
 
 use crate::film::write::{write_image, ImageFormat};
 use crate::light::Light;
-use crate::render::{render, RenderOptions};
-use crate::scene::desc::{Display, IntegratorKind};
+use crate::render::{render, render_strategies, RenderOptions, MAX_STRATEGY_LENGTH};
+use crate::scene::desc::{Display, IntegratorKind, Tonemap};
 use crate::scene::{self, Scene};
 use crate::{Error, Result};
 use clap::{Args, Parser, Subcommand};
@@ -64,6 +64,10 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Also write one EXR per BDPT strategy (s light vertices, t camera
+    /// vertices), unweighted and MIS-weighted, for paths of up to 5 segments.
+    #[arg(long, value_name = "DIR")]
+    pub bdpt_strategies: Option<PathBuf>,
 }
 
 fn positive_seconds(s: &str) -> std::result::Result<f32, String> {
@@ -168,6 +172,32 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             stats.discarded, stats.samples
         );
     }
+    if let Some(dir) = &args.bdpt_strategies {
+        write_strategies(&scene, &options, dir)?;
+    }
+    Ok(())
+}
+
+/// Renders BDPT once more, keeping each strategy apart, and writes
+/// `s{S}_t{T}_unweighted.exr` and `s{S}_t{T}_weighted.exr` into `dir`.
+fn write_strategies(scene: &Scene, options: &RenderOptions, dir: &std::path::Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let images = render_strategies(scene, options)?;
+    for i in &images {
+        for (kind, image) in [("unweighted", &i.unweighted), ("weighted", &i.weighted)] {
+            let path = dir.join(format!("s{}_t{}_{kind}.exr", i.s, i.t));
+            write_image(&path, image, Tonemap::Clamp, 0.0)?;
+        }
+    }
+    eprintln!(
+        "wrote {} strategy images (paths up to {} segments) to {}",
+        2 * images.len(),
+        scene.settings.max_depth.min(MAX_STRATEGY_LENGTH),
+        dir.display()
+    );
     Ok(())
 }
 

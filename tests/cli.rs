@@ -114,3 +114,44 @@ fn bad_flags_are_refused_without_a_panic() {
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn writes_bdpt_strategy_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let strategies = dir.path().join("strategies");
+    let output = tracer()
+        .args(["render", "scenes/cornell-box.json", "--integrator", "bdpt"])
+        .args([
+            "--spp",
+            "2",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--max-depth",
+            "2",
+        ])
+        .arg("-o")
+        .arg(dir.path().join("box.exr"))
+        .arg("--bdpt-strategies")
+        .arg(&strategies)
+        .current_dir(common::repo())
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&strategies)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    // Lengths 1 and 2: (0,2); (0,3), (1,2), (2,1); each unweighted and weighted.
+    let expected: Vec<String> = ["s0_t2", "s0_t3", "s1_t2", "s2_t1"]
+        .iter()
+        .flat_map(|s| [format!("{s}_unweighted.exr"), format!("{s}_weighted.exr")])
+        .collect();
+    assert_eq!(names, expected);
+}

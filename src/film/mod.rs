@@ -40,6 +40,23 @@ impl Image {
     }
 }
 
+/// Relative mean squared error of `image` against `reference`: the mean over
+/// pixels and channels of (image − reference)² / (reference² + 0.01). The
+/// 0.01 keeps black pixels from dominating. `None` if the sizes differ.
+pub fn relative_mse(image: &Image, reference: &Image) -> Option<f64> {
+    if (image.width, image.height) != (reference.width, reference.height) {
+        return None;
+    }
+    let mut sum = 0.0f64;
+    for (a, r) in image.pixels.iter().zip(&reference.pixels) {
+        for (a, r) in a.to_array().into_iter().zip(r.to_array()) {
+            let (a, r) = (a as f64, r as f64);
+            sum += (a - r) * (a - r) / (r * r + 0.01);
+        }
+    }
+    Some(sum / (3 * reference.pixels.len().max(1)) as f64)
+}
+
 /// A contribution that lands in a pixel chosen by projection (light tracing
 /// and BDPT's t = 1 strategy), not in the pixel whose sample made it.
 #[derive(Clone, Copy, Debug)]

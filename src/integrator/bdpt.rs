@@ -15,9 +15,8 @@
 //! BSDF vertex has `d_vcm = 0` (nothing can connect to it), and the
 //! light point seen directly (s = 1, t = 1) is left to s = 0.
 
-use super::subpath::{mis, trace_light_path, visible, Endpoint, LightVertex, Walk};
+use super::subpath::{mis, trace_light_path, visible, Endpoint, LightVertex, SplatSink, Walk};
 use crate::color::{is_black, Rgb};
-use crate::film::Splat;
 use crate::geometry::Ray;
 use crate::light::Light;
 use crate::material::{Bsdf, SurfacePoint, Transport};
@@ -31,8 +30,13 @@ pub struct BdptBuffers {
     pub light_vertices: Vec<LightVertex>,
 }
 
+/// A strategy's estimate on its own and its MIS weight.
+type Weighted = (Rgb, f32);
+
+const NOTHING: Weighted = (Rgb::ZERO, 0.0);
+
 /// One BDPT sample through image point (`x`, `y`): returns the camera-side
-/// estimate for its pixel and pushes the light-side splats.
+/// estimate for its pixel and pushes the light-side splats to `sink`.
 #[allow(clippy::too_many_arguments)]
 pub fn sample(
     scene: &Scene,
@@ -42,8 +46,7 @@ pub fn sample(
     light_sampler: &mut Sampler,
     max_depth: u32,
     buffers: &mut BdptBuffers,
-    splats: &mut Vec<Splat>,
-    discarded: &mut u64,
+    sink: &mut SplatSink,
 ) -> Rgb {
     buffers.light_vertices.clear();
     trace_light_path(
@@ -52,9 +55,9 @@ pub fn sample(
         max_depth,
         false,
         Some(&mut buffers.light_vertices),
-        splats,
-        discarded,
+        sink,
     );
+    let pixel = y as u32 * scene.camera.width() + x as u32;
 
     let ray = scene.camera.ray(x, y);
     let paths = super::subpath::light_paths_per_pass(scene);
@@ -73,6 +76,12 @@ pub fn sample(
         finite_start: true,
     };
     let mut result = Rgb::ZERO;
+    // Adds one strategy's share; `t` counts the camera's vertices, the pinhole included.
+    let add =
+        |result: &mut Rgb, (unweighted, weight): Weighted, s: u32, t: u32, sink: &mut SplatSink| {
+            *result += unweighted * weight;
+            sink.record(s, t, pixel, unweighted, weight);
+        };
     loop {
         camera_sampler.start_vertex();
         let ray = Ray::new(walk.origin, walk.dir);
@@ -84,22 +93,25 @@ pub fn sample(
         walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
         let shading = scene.shading[hit.triangle as usize];
 
+        let t = walk.length + 1;
         if shading.light != NO_LIGHT {
-            result += walk.throughput * hit_emitter(scene, shading.light as usize, wo, &walk);
+            let (le, weight) = hit_emitter(scene, shading.light as usize, wo, &walk);
+            add(&mut result, (walk.throughput * le, weight), 0, t, sink);
         }
         if walk.length >= max_depth {
             break;
         }
         let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
         if !bsdf.is_delta() {
-            result +=
-                walk.throughput * light_sample(scene, &surface, &bsdf, wo, &walk, camera_sampler);
+            let (l, weight) = light_sample(scene, &surface, &bsdf, wo, &walk, camera_sampler);
+            add(&mut result, (walk.throughput * l, weight), 1, t, sink);
             for v in &buffers.light_vertices {
                 if v.length + 1 + walk.length > max_depth {
                     break;
                 }
-                result +=
-                    walk.throughput * v.throughput * connect(scene, &surface, &bsdf, wo, &walk, v);
+                let (l, weight) = connect(scene, &surface, &bsdf, wo, &walk, v);
+                let l = walk.throughput * v.throughput * l;
+                add(&mut result, (l, weight), v.length + 1, t, sink);
             }
         }
         if !walk.scatter(&bsdf, &surface, wo, camera_sampler, Transport::Radiance) {
@@ -111,22 +123,22 @@ pub fn sample(
 }
 
 /// s = 0: the camera path has reached an emitter (eq. 43).
-fn hit_emitter(scene: &Scene, light: usize, wo: Vec3, walk: &Walk) -> Rgb {
+fn hit_emitter(scene: &Scene, light: usize, wo: Vec3, walk: &Walk) -> Weighted {
     let Light::Area(area) = &scene.lights[light] else {
-        return Rgb::ZERO;
+        return NOTHING;
     };
     let emitted = area.emitted(wo);
     if is_black(emitted) {
-        return Rgb::ZERO;
+        return NOTHING;
     }
     if walk.length == 1 {
         // Seen directly: no other strategy makes this path.
-        return emitted;
+        return (emitted, 1.0);
     }
     let pick = scene.light_selector.pmf(light);
     let (direct_pdf, emission_pdf) = area.pdfs_for_hit(wo);
     let w_camera = mis(direct_pdf * pick) * walk.d_vcm + mis(emission_pdf * pick) * walk.d_vc;
-    emitted / (1.0 + w_camera)
+    (emitted, 1.0 / (1.0 + w_camera))
 }
 
 /// s = 1: a point chosen on a light, connected to the camera vertex (eq. 44).
@@ -137,19 +149,19 @@ fn light_sample(
     wo: Vec3,
     walk: &Walk,
     sampler: &mut Sampler,
-) -> Rgb {
+) -> Weighted {
     let u_select = sampler.next_1d();
     let u_point = sampler.next_2d();
     let Some((index, pick)) = scene.light_selector.sample(u_select) else {
-        return Rgb::ZERO;
+        return NOTHING;
     };
     let light = &scene.lights[index];
     let Some(sample) = light.sample_incident(surface.position, u_point) else {
-        return Rgb::ZERO;
+        return NOTHING;
     };
     let f = bsdf.eval(wo, sample.wi);
     if is_black(f) {
-        return Rgb::ZERO;
+        return NOTHING;
     }
     let pdfs = light.pdfs_for_incident(sample.wi, sample.distance, sample.normal, sample.pdf);
     let (bsdf_pdf, reverse_pdf) = bsdf.pdfs(wo, sample.wi);
@@ -160,11 +172,11 @@ fn light_sample(
     let w_camera = mis(pdfs.emission * cos_receiver / (pdfs.direct * pdfs.cos_light))
         * (walk.d_vcm + walk.d_vc * mis(reverse_pdf));
     let weight = 1.0 / (w_light + 1.0 + w_camera);
-    let contribution = f * sample.value * (weight / (pick * sample.pdf));
+    let contribution = f * sample.value / (pick * sample.pdf);
     if is_black(contribution) || !super::pt::unoccluded(scene, surface, &sample) {
-        return Rgb::ZERO;
+        return NOTHING;
     }
-    contribution
+    (contribution, weight)
 }
 
 /// s > 1, t > 1: the camera vertex joined to a stored light vertex (eq. 45).
@@ -176,21 +188,21 @@ fn connect(
     wo: Vec3,
     walk: &Walk,
     v: &LightVertex,
-) -> Rgb {
+) -> Weighted {
     let to_light = v.surface.position - surface.position;
     let distance2 = to_light.length_squared();
     if distance2 <= 0.0 {
-        return Rgb::ZERO;
+        return NOTHING;
     }
     let distance = distance2.sqrt();
     let dir = to_light / distance;
     let camera_f = bsdf.eval(wo, dir);
     if is_black(camera_f) {
-        return Rgb::ZERO;
+        return NOTHING;
     }
     let light_f = v.bsdf.eval_mode(v.wo, -dir, Transport::Importance);
     if is_black(light_f) {
-        return Rgb::ZERO;
+        return NOTHING;
     }
     let (camera_pdf, camera_reverse) = bsdf.pdfs(wo, dir);
     let (light_pdf, light_reverse) = v.bsdf.pdfs(v.wo, -dir);
@@ -202,7 +214,7 @@ fn connect(
     let w_light = mis(camera_pdf_area) * (v.d_vcm + v.d_vc * mis(light_reverse));
     let w_camera = mis(light_pdf_area) * (walk.d_vcm + walk.d_vc * mis(camera_reverse));
     let weight = 1.0 / (w_light + 1.0 + w_camera);
-    let contribution = camera_f * light_f * (weight / distance2);
+    let contribution = camera_f * light_f / distance2;
     if is_black(contribution)
         || !visible(
             scene,
@@ -210,7 +222,7 @@ fn connect(
             Endpoint::surface(&v.surface),
         )
     {
-        return Rgb::ZERO;
+        return NOTHING;
     }
-    contribution
+    (contribution, weight)
 }

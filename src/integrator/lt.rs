@@ -5,18 +5,11 @@
 //! a real check. Point and spot lights have no area and are never seen
 //! directly by the pinhole camera, in any integrator.
 
-use super::subpath::trace_light_path;
-use crate::film::Splat;
+use super::subpath::{trace_light_path, SplatSink};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
 /// Traces one light path and pushes its splats.
-pub fn sample(
-    scene: &Scene,
-    sampler: &mut Sampler,
-    max_depth: u32,
-    splats: &mut Vec<Splat>,
-    discarded: &mut u64,
-) {
-    trace_light_path(scene, sampler, max_depth, true, None, splats, discarded);
+pub fn sample(scene: &Scene, sampler: &mut Sampler, max_depth: u32, sink: &mut SplatSink) {
+    trace_light_path(scene, sampler, max_depth, true, None, sink);
 }

@@ -245,9 +245,60 @@ impl CameraConnection {
     }
 }
 
+/// One strategy's share of one sample, kept only for `--bdpt-strategies`.
+/// A path of `s` light vertices (the light's own point included) joined to
+/// `t` camera vertices (the pinhole included).
+#[derive(Clone, Copy, Debug)]
+pub struct StrategySample {
+    pub s: u32,
+    pub t: u32,
+    pub pixel: u32,
+    /// The strategy's estimate alone, as if it were the only one.
+    pub unweighted: Rgb,
+    /// Its MIS weight: `unweighted × weight` is what enters the image.
+    pub weight: f32,
+}
+
+/// What the light side of a sample produces besides the camera pixel's own
+/// estimate: splats to other pixels, discarded splats, and optionally
+/// per-strategy records.
+#[derive(Default)]
+pub struct SplatSink {
+    pub splats: Vec<Splat>,
+    /// Splats dropped for being NaN or infinite.
+    pub discarded: u64,
+    pub strategies: Option<Vec<StrategySample>>,
+}
+
+impl SplatSink {
+    fn emit(&mut self, pixel: u32, value: Rgb) {
+        if is_finite(value) {
+            self.splats.push(Splat { pixel, value });
+        } else {
+            self.discarded += 1;
+        }
+    }
+
+    /// Records a strategy's contribution when strategies are being kept.
+    pub fn record(&mut self, s: u32, t: u32, pixel: u32, unweighted: Rgb, weight: f32) {
+        if let Some(list) = self.strategies.as_mut() {
+            if weight > 0.0 && is_finite(unweighted) && !is_black(unweighted) {
+                list.push(StrategySample {
+                    s,
+                    t,
+                    pixel,
+                    unweighted,
+                    weight,
+                });
+            }
+        }
+    }
+}
+
 /// Traces one light subpath. Every non-delta vertex is connected to the
 /// camera (t = 1) and splatted; with `keep` the vertices are also stored for
-/// BDPT's connections. `light_tracing_only` selects the pure light tracer:
+/// BDPT's connections. Splats and strategy records go to `sink`.
+/// `light_tracing_only` selects the pure light tracer:
 /// no MIS weight, and the light's own point is also connected to the camera
 /// (which BDPT leaves to camera paths that hit the light, s = 0).
 #[allow(clippy::too_many_arguments)]
@@ -257,21 +308,13 @@ pub fn trace_light_path(
     max_depth: u32,
     light_tracing_only: bool,
     mut keep: Option<&mut Vec<LightVertex>>,
-    splats: &mut Vec<Splat>,
-    discarded: &mut u64,
+    sink: &mut SplatSink,
 ) {
     sampler.start_vertex();
     let Some((mut walk, index, emission, pick)) = start_light_walk(scene, sampler) else {
         return;
     };
     let paths = light_paths_per_pass(scene);
-    let mut emit = |splat: Splat, discarded: &mut u64| {
-        if is_finite(splat.value) {
-            splats.push(splat);
-        } else {
-            *discarded += 1;
-        }
-    };
 
     if light_tracing_only {
         if let crate::light::Light::Area(light) = &scene.lights[index] {
@@ -291,13 +334,7 @@ pub fn trace_light_path(
                     )
                 {
                     let value = le * cos / (pick * emission.direct_pdf_area);
-                    emit(
-                        Splat {
-                            pixel: c.pixel,
-                            value: c.splat(value, paths),
-                        },
-                        discarded,
-                    );
+                    sink.emit(c.pixel, c.splat(value, paths));
                 }
             }
         }
@@ -349,14 +386,9 @@ pub fn trace_light_path(
                             * (walk.d_vcm + walk.d_vc * mis(reverse_pdf));
                         1.0 / (w_light + 1.0)
                     };
-                    let value = walk.throughput * f * weight;
-                    emit(
-                        Splat {
-                            pixel: c.pixel,
-                            value: c.splat(value, paths),
-                        },
-                        discarded,
-                    );
+                    let value = c.splat(walk.throughput * f, paths);
+                    sink.emit(c.pixel, value * weight);
+                    sink.record(walk.length + 1, 1, c.pixel, value, weight);
                 }
             }
         }

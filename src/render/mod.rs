@@ -10,17 +10,20 @@
 //! same order for any thread count. Tiles run in batches so the lists stay small.
 
 mod progress;
+mod strategies;
 mod tiles;
+
+pub use strategies::{render_strategies, StrategyImages, MAX_STRATEGY_LENGTH};
 
 pub use tiles::{Tile, TILE_SIZE};
 
 use crate::color::{is_finite, Rgb};
 use crate::film::Image;
-use crate::film::Splat;
+use crate::integrator::subpath::SplatSink;
 use crate::integrator::{bdpt, lt, pt};
 use crate::sampling::Sampler;
 use crate::scene::desc::IntegratorKind;
-use crate::scene::Scene;
+use crate::scene::{Scene, Settings};
 use crate::{Error, Result};
 use glam::DVec3;
 use progress::Progress;
@@ -89,14 +92,15 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Image, RenderSt
         let first = stats.spp;
         let count = pass_size(stats.passes).min(settings.spp - first);
         for tiles in tiles.chunks_mut(batch) {
-            let lists: Vec<Vec<Splat>> = pool.install(|| {
+            let lists: Vec<Vec<crate::film::Splat>> = pool.install(|| {
                 tiles
                     .par_iter_mut()
                     .map(|tile| {
-                        let mut splats = Vec::new();
-                        render_tile(scene, tile, first, count, &mut splats);
+                        let mut sink = SplatSink::default();
+                        render_tile(scene, settings, tile, first, count, &mut sink);
+                        tile.discarded += sink.discarded;
                         progress.advance(tile.pixel_count() as u64 * count as u64);
-                        splats
+                        sink.splats
                     })
                     .collect()
             });
@@ -133,8 +137,14 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Image, RenderSt
 
 /// Adds samples `first .. first + count` to every pixel of `tile`, pushing
 /// any splats the integrator makes.
-fn render_tile(scene: &Scene, tile: &mut Tile, first: u32, count: u32, splats: &mut Vec<Splat>) {
-    let s = &scene.settings;
+fn render_tile(
+    scene: &Scene,
+    s: &Settings,
+    tile: &mut Tile,
+    first: u32,
+    count: u32,
+    sink: &mut SplatSink,
+) {
     let light_seed = s.seed ^ LIGHT_SEED_DOMAIN;
     let mut buffers = bdpt::BdptBuffers::default();
     for y in tile.y0..tile.y1 {
@@ -151,13 +161,7 @@ fn render_tile(scene: &Scene, tile: &mut Tile, first: u32, count: u32, splats: &
                     }
                     IntegratorKind::Lt => {
                         let mut sampler = Sampler::new(light_seed, x, y, index);
-                        lt::sample(
-                            scene,
-                            &mut sampler,
-                            s.max_depth,
-                            splats,
-                            &mut tile.discarded,
-                        );
+                        lt::sample(scene, &mut sampler, s.max_depth, sink);
                         Rgb::ZERO
                     }
                     IntegratorKind::Bdpt => {
@@ -172,8 +176,7 @@ fn render_tile(scene: &Scene, tile: &mut Tile, first: u32, count: u32, splats: &
                             &mut light,
                             s.max_depth,
                             &mut buffers,
-                            splats,
-                            &mut tile.discarded,
+                            sink,
                         )
                     }
                 };
