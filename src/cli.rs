@@ -234,11 +234,13 @@ fn run_info(path: &std::path::Path) -> Result<()> {
             b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
         );
     }
+    let r = scene.bvh.report();
     println!(
-        "bvh:        {} nodes, {} leaves, SAH cost {:.2}, {} bytes, built in {:.3} s",
-        scene.bvh.nodes().len(),
-        scene.bvh.leaf_count(),
-        scene.bvh.sah_cost(),
+        "bvh:        4-wide, {} nodes, {} leaves, SAH cost {:.2} (binary {:.2}), {} bytes, built in {:.3} s",
+        r.nodes,
+        r.leaves,
+        r.sah_cost,
+        r.binary_sah_cost,
         scene.bvh.memory_bytes(),
         scene.report.bvh_build_seconds
     );

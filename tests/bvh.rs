@@ -4,7 +4,7 @@ mod common;
 
 use common::Rng;
 use glam::Vec3;
-use tracer::bvh::{BuildOptions, Bvh, Hit};
+use tracer::bvh::{BuildOptions, Bvh, Hit, WideBvh};
 use tracer::geometry::shapes;
 use tracer::geometry::triangle::RayShear;
 use tracer::geometry::{Ray, Triangle};
@@ -58,9 +58,60 @@ fn random_ray(rng: &mut Rng, k: usize) -> Ray {
     Ray::new(origin, dir)
 }
 
-fn assert_same(tris: &[Triangle], bvh: &Bvh, ray: &Ray) {
+/// The scalar binary BVH and the wide BVH over the same triangles: both
+/// must answer every query exactly as brute force does.
+struct Both {
+    binary: Bvh,
+    wide: WideBvh,
+}
+
+impl Both {
+    fn build(tris: &[Triangle]) -> Both {
+        Both::build_with(tris, &BuildOptions::default())
+    }
+
+    fn build_with(tris: &[Triangle], options: &BuildOptions) -> Both {
+        Both {
+            binary: Bvh::build_with(tris, options),
+            wide: WideBvh::build_with(tris, options),
+        }
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let hit = self.binary.intersect(ray);
+        let wide = self.wide.intersect(ray);
+        assert_eq!(
+            hit.map(|h| h.t),
+            wide.map(|h| h.t),
+            "wide and binary BVH disagree on {ray:?}"
+        );
+        hit
+    }
+}
+
+fn assert_same(tris: &[Triangle], bvh: &Both, ray: &Ray) {
+    assert_same_in(
+        tris,
+        |r| bvh.binary.intersect(r),
+        |r| bvh.binary.occluded(r),
+        ray,
+    );
+    assert_same_in(
+        tris,
+        |r| bvh.wide.intersect(r),
+        |r| bvh.wide.occluded(r),
+        ray,
+    );
+}
+
+fn assert_same_in(
+    tris: &[Triangle],
+    intersect: impl Fn(&Ray) -> Option<Hit>,
+    occluded: impl Fn(&Ray) -> bool,
+    ray: &Ray,
+) {
     let expected = brute_force(tris, ray);
-    let found = bvh.intersect(ray);
+    let found = intersect(ray);
     match (expected, found) {
         (None, None) => {}
         (Some(e), Some(f)) => {
@@ -78,7 +129,7 @@ fn assert_same(tris: &[Triangle], bvh: &Bvh, ray: &Ray) {
         (e, f) => panic!("brute force {e:?} but BVH {f:?} for {ray:?}"),
     }
     assert_eq!(
-        bvh.occluded(ray),
+        occluded(ray),
         expected.is_some(),
         "any-hit disagrees for {ray:?}"
     );
@@ -94,9 +145,10 @@ fn random_soups_match_brute_force() {
             BuildOptions {
                 bins: 4,
                 max_leaf_size: 1,
+                parallel: false,
             },
         ] {
-            let bvh = Bvh::build_with(&tris, &options);
+            let bvh = Both::build_with(&tris, &options);
             for k in 0..2000 {
                 let mut ray = random_ray(&mut rng, k);
                 if k % 5 == 0 {
@@ -116,7 +168,7 @@ fn rays_aimed_at_triangles_match_brute_force() {
     // Random rays mostly miss a sparse soup; aim at vertices and edges too.
     let mut rng = Rng::new(11);
     let tris = soup(&mut rng, 500, 1.5);
-    let bvh = Bvh::build(&tris);
+    let bvh = Both::build(&tris);
     for k in 0..5000 {
         let t = tris[k % tris.len()];
         let target = match k % 3 {
@@ -144,7 +196,7 @@ fn coplanar_grid_and_extreme_coordinates() {
                 tris.push(Triangle::new(p(x, z), p(x + 1.0, z + 1.0), p(x + 1.0, z)));
             }
         }
-        let bvh = Bvh::build(&tris);
+        let bvh = Both::build(&tris);
         for k in 0..2000 {
             let origin = (rng.vec3(-2.0, 22.0) * Vec3::new(1.0, 0.0, 1.0)
                 + Vec3::Y * rng.range(0.5, 5.0))
@@ -178,7 +230,7 @@ fn closed_mesh_is_watertight_from_inside() {
             )
         })
         .collect();
-    let bvh = Bvh::build(&tris);
+    let bvh = Both::build(&tris);
     let mut rng = Rng::new(5);
     let center = Vec3::new(0.3, -0.2, 0.1);
     for k in 0..20000 {
@@ -201,25 +253,39 @@ fn closed_mesh_is_watertight_from_inside() {
 
 #[test]
 fn empty_and_single_triangle_scenes() {
-    let empty = Bvh::build(&[]);
     let ray = Ray::new(Vec3::ZERO, Vec3::Z);
-    assert!(empty.intersect(&ray).is_none());
-    assert!(!empty.occluded(&ray));
+    let empty = Both::build(&[]);
+    for (hit, occluded) in [
+        (empty.binary.intersect(&ray), empty.binary.occluded(&ray)),
+        (empty.wide.intersect(&ray), empty.wide.occluded(&ray)),
+    ] {
+        assert!(hit.is_none() && !occluded);
+    }
 
     let one = [Triangle::new(
         Vec3::new(-1.0, -1.0, 5.0),
         Vec3::new(1.0, -1.0, 5.0),
         Vec3::new(0.0, 1.0, 5.0),
     )];
-    let bvh = Bvh::build(&one);
+    let bvh = Both::build(&one);
     let hit = bvh.intersect(&ray).unwrap();
     assert_eq!((hit.triangle, hit.t), (0, 5.0));
     // tmax just short of the triangle, and tmin just past it.
     assert!(bvh.intersect(&Ray { tmax: 4.999, ..ray }).is_none());
     assert!(bvh.intersect(&Ray { tmin: 5.0, ..ray }).is_none());
-    assert!(
-        bvh.intersect(&Ray { tmin: 4.999, ..ray }).is_some(),
-        "a hit just beyond tmin is kept"
+    // A hit just beyond tmin is kept: the box tests honour the ray's own
+    // tmin, with no fixed epsilon that would lose near hits.
+    for tmin in [4.999, 4.99999] {
+        assert!(
+            bvh.intersect(&Ray { tmin, ..ray }).is_some(),
+            "hit lost with tmin {tmin}"
+        );
+    }
+    let near = Ray::new(Vec3::new(0.0, 0.0, 5.0 - 1e-5), Vec3::Z);
+    assert_eq!(
+        bvh.intersect(&near).map(|h| h.triangle),
+        Some(0),
+        "a hit 1e-5 away was lost"
     );
 }
 
@@ -227,9 +293,50 @@ fn empty_and_single_triangle_scenes() {
 fn sah_cost_is_reported_and_sensible() {
     let mut rng = Rng::new(1);
     let tris = soup(&mut rng, 5000, 0.3);
-    let bvh = Bvh::build(&tris);
-    let cost = bvh.sah_cost();
+    let bvh = Both::build(&tris);
+    let cost = bvh.binary.sah_cost();
     // A flat list would cost 5000 triangle tests; a good tree a few dozen.
     assert!(cost > 1.0 && cost < 100.0, "SAH cost {cost}");
-    assert_eq!(bvh.triangle_count(), 5000);
+    assert_eq!(bvh.binary.triangle_count(), 5000);
+    // Four children and four triangles per test: fewer tests than binary.
+    let report = bvh.wide.report();
+    assert!(
+        report.sah_cost > 1.0 && report.sah_cost < 0.7 * cost,
+        "wide SAH cost {}",
+        report.sah_cost
+    );
+    assert_eq!(report.triangles, 5000);
+    assert_eq!(report.binary_sah_cost, cost);
+    let blocks = bvh.wide.blocks();
+    let ids: std::collections::BTreeSet<u32> = blocks
+        .iter()
+        .flat_map(|b| b.id)
+        .filter(|&i| i != u32::MAX)
+        .collect();
+    assert_eq!(ids.len(), 5000, "every triangle in exactly one leaf");
+}
+
+/// Subtrees built in parallel are laid out exactly as the sequential builder
+/// lays them out: the tree is a function of the triangles, not of the threads.
+#[test]
+fn parallel_build_equals_sequential_build() {
+    let mut rng = Rng::new(11);
+    let tris = soup(&mut rng, 60_000, 0.05);
+    let parallel = Bvh::build(&tris);
+    let sequential = Bvh::build_with(
+        &tris,
+        &BuildOptions {
+            parallel: false,
+            ..BuildOptions::default()
+        },
+    );
+    assert_eq!(parallel.nodes().len(), sequential.nodes().len());
+    assert!(parallel.nodes() == sequential.nodes());
+    let both = Both {
+        binary: parallel,
+        wide: WideBvh::build(&tris),
+    };
+    for k in 0..2000 {
+        assert_same(&tris, &both, &random_ray(&mut rng, k));
+    }
 }

@@ -5,20 +5,25 @@
 use super::{Bvh, Node, INTERSECTION_COST, TRAVERSAL_COST};
 use crate::geometry::{Aabb, Triangle};
 use glam::Vec3;
+use rayon::prelude::*;
 
 #[derive(Clone, Debug)]
 pub struct BuildOptions {
-    /// Bins per axis. 16 is within a few per cent of a full sweep's SAH cost.
+    /// Bins per axis (2 to 32). 16 is within a few per cent of a full sweep's SAH cost.
     pub bins: usize,
-    /// A node with more triangles than this is always split.
+    /// A node with more triangles than this is always split. Four matches the
+    /// wide BVH's leaves, which test four triangles at once.
     pub max_leaf_size: usize,
+    /// Build independent subtrees on the rayon pool the call runs in.
+    pub parallel: bool,
 }
 
 impl Default for BuildOptions {
     fn default() -> Self {
         BuildOptions {
             bins: 16,
-            max_leaf_size: 8,
+            max_leaf_size: 4,
+            parallel: true,
         }
     }
 }
@@ -34,6 +39,12 @@ const EMPTY_BIN: Bin = Bin {
     count: 0,
 };
 
+const MAX_BINS: usize = 32;
+
+/// Below this many triangles a subtree is built on the calling thread: the
+/// fork costs more than it saves, and big subtrees already keep every thread busy.
+const PARALLEL_MIN: usize = 16 * 1024;
+
 struct Split {
     axis: usize,
     /// Triangles in bins `< bin` go left.
@@ -41,85 +52,163 @@ struct Split {
     cost: f32,
 }
 
+/// What every subtree's construction reads.
+struct Context<'a> {
+    boxes: &'a [Aabb],
+    centroids: &'a [Vec3],
+    bins: usize,
+    options: &'a BuildOptions,
+}
+
+const UNSET: Node = Node {
+    bounds: Aabb::EMPTY,
+    first: 0,
+    count: 0,
+};
+
 impl Bvh {
     pub fn build_with(triangles: &[Triangle], options: &BuildOptions) -> Bvh {
-        let bins = options.bins.max(2);
-        let boxes: Vec<Aabb> = triangles.iter().map(|t| Aabb::from_points(&t.v)).collect();
+        let boxes: Vec<Aabb> = if options.parallel {
+            triangles
+                .par_iter()
+                .map(|t| Aabb::from_points(&t.v))
+                .collect()
+        } else {
+            triangles.iter().map(|t| Aabb::from_points(&t.v)).collect()
+        };
         let centroids: Vec<Vec3> = boxes.iter().map(|b| b.center()).collect();
         let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * triangles.len().max(1));
-
-        nodes.push(Node {
-            bounds: Aabb::EMPTY,
-            first: 0,
-            count: 0,
-        });
-        // Work list of (node, first, end) ranges into `order`; an explicit stack keeps
-        // deep, unbalanced trees from overflowing the call stack.
-        let mut work = vec![(0usize, 0usize, triangles.len(), 0usize)];
-        while let Some((node, first, end, depth)) = work.pop() {
-            let range = &mut order[first..end];
-            let bounds = range
-                .iter()
-                .fold(Aabb::EMPTY, |b, &i| b.union(boxes[i as usize]));
-            let centroid_bounds = range
-                .iter()
-                .fold(Aabb::EMPTY, |b, &i| b.grow(centroids[i as usize]));
-            let count = range.len();
-            let leaf_cost = count as f32 * INTERSECTION_COST;
-
-            let split = find_split(range, &boxes, &centroids, centroid_bounds, bins, bounds);
-            let mid = match split {
-                // Past this depth the SAH is peeling off a few triangles at a time
-                // (exponentially spaced centroids): split at the median to bound the
-                // depth, and with it the traversal stack.
-                _ if depth >= MAX_SAH_DEPTH && count > options.max_leaf_size => {
-                    median_split(range, &centroids, centroid_bounds)
-                }
-                Some(s) if s.cost < leaf_cost || count > options.max_leaf_size => {
-                    partition(range, |i| {
-                        bin_of(centroids[i as usize], centroid_bounds, s.axis, bins) < s.bin
-                    })
-                }
-                // All centroids coincide: no plane separates them, so halve by index.
-                None if count > options.max_leaf_size => {
-                    median_split(range, &centroids, centroid_bounds)
-                }
-                _ => 0,
-            };
-            if mid == 0 || mid == count {
-                nodes[node] = Node {
-                    bounds,
-                    first: first as u32,
-                    count: count as u32,
-                };
-                continue;
-            }
-            let left = nodes.len();
-            nodes.push(Node {
-                bounds: Aabb::EMPTY,
-                first: 0,
-                count: 0,
-            });
-            nodes.push(nodes[left]);
-            nodes[node] = Node {
-                bounds,
-                first: left as u32,
-                count: 0,
-            };
-            work.push((left + 1, first + mid, end, depth + 1));
-            work.push((left, first, first + mid, depth + 1));
-        }
-        if triangles.is_empty() {
-            // No root at all: traversal checks for this and reports no hit.
-            nodes.clear();
-        }
+        let context = Context {
+            boxes: &boxes,
+            centroids: &centroids,
+            bins: options.bins.clamp(2, MAX_BINS),
+            options,
+        };
+        // No root at all for no triangles: traversal checks for this and reports no hit.
+        let nodes = if triangles.is_empty() {
+            Vec::new()
+        } else {
+            build_subtree(&context, &mut order, 0, 0)
+        };
         Bvh {
             triangles: order.iter().map(|&i| triangles[i as usize]).collect(),
             original_index: order,
             nodes,
         }
     }
+}
+
+/// Bounds of a range, and where to split it (0 for a leaf).
+fn decide(context: &Context, range: &mut [u32], depth: usize) -> (Aabb, usize) {
+    let (boxes, centroids) = (context.boxes, context.centroids);
+    let bounds = range
+        .iter()
+        .fold(Aabb::EMPTY, |b, &i| b.union(boxes[i as usize]));
+    let centroid_bounds = range
+        .iter()
+        .fold(Aabb::EMPTY, |b, &i| b.grow(centroids[i as usize]));
+    let count = range.len();
+    let max_leaf = context.options.max_leaf_size.max(1);
+    let leaf_cost = count as f32 * INTERSECTION_COST;
+    let bins = context.bins;
+    let split = find_split(range, boxes, centroids, centroid_bounds, bins, bounds);
+    let mid = match split {
+        // Past this depth the SAH is peeling off a few triangles at a time
+        // (exponentially spaced centroids): split at the median to bound the
+        // depth, and with it the traversal stack.
+        _ if depth >= MAX_SAH_DEPTH && count > max_leaf => {
+            median_split(range, centroids, centroid_bounds)
+        }
+        Some(s) if s.cost < leaf_cost || count > max_leaf => partition(range, |i| {
+            bin_of(centroids[i as usize], centroid_bounds, s.axis, bins) < s.bin
+        }),
+        // All centroids coincide: no plane separates them, so halve by index.
+        None if count > max_leaf => median_split(range, centroids, centroid_bounds),
+        _ => 0,
+    };
+    (bounds, if mid == count { 0 } else { mid })
+}
+
+/// Builds the subtree over `order`, whose first entry is triangle `offset`
+/// in leaf order. Returns its nodes with the root first and siblings adjacent.
+fn build_subtree(context: &Context, order: &mut [u32], offset: usize, depth: usize) -> Vec<Node> {
+    if !context.options.parallel || order.len() < PARALLEL_MIN {
+        return build_sequential(context, order, offset, depth);
+    }
+    let (bounds, mid) = decide(context, order, depth);
+    if mid == 0 {
+        return vec![Node {
+            bounds,
+            first: offset as u32,
+            count: order.len() as u32,
+        }];
+    }
+    let (left_order, right_order) = order.split_at_mut(mid);
+    let (left, right) = rayon::join(
+        || build_subtree(context, left_order, offset, depth + 1),
+        || build_subtree(context, right_order, offset + mid, depth + 1),
+    );
+    // Layout: [root, left root, right root, rest of left, rest of right].
+    let left_index = |i: u32| if i == 0 { 1 } else { i + 2 };
+    let right_shift = left.len() as u32 + 1;
+    let right_index = |i: u32| if i == 0 { 2 } else { i + right_shift };
+    let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
+    nodes.push(Node {
+        bounds,
+        first: 1,
+        count: 0,
+    });
+    let relink = |n: &Node, map: &dyn Fn(u32) -> u32| {
+        if n.is_leaf() {
+            *n
+        } else {
+            Node {
+                first: map(n.first),
+                ..*n
+            }
+        }
+    };
+    nodes.push(relink(&left[0], &left_index));
+    nodes.push(relink(&right[0], &right_index));
+    nodes.extend(left[1..].iter().map(|n| relink(n, &left_index)));
+    nodes.extend(right[1..].iter().map(|n| relink(n, &right_index)));
+    nodes
+}
+
+fn build_sequential(
+    context: &Context,
+    order: &mut [u32],
+    offset: usize,
+    depth: usize,
+) -> Vec<Node> {
+    let mut nodes = Vec::with_capacity(order.len() / 2 + 1);
+    nodes.push(UNSET);
+    // Work list of (node, first, end, depth) ranges into `order`; an explicit
+    // stack keeps deep, unbalanced trees from overflowing the call stack.
+    let mut work = vec![(0usize, 0usize, order.len(), depth)];
+    while let Some((node, first, end, depth)) = work.pop() {
+        let range = &mut order[first..end];
+        let (bounds, mid) = decide(context, range, depth);
+        if mid == 0 {
+            nodes[node] = Node {
+                bounds,
+                first: (offset + first) as u32,
+                count: (end - first) as u32,
+            };
+            continue;
+        }
+        let left = nodes.len();
+        nodes.push(UNSET);
+        nodes.push(UNSET);
+        nodes[node] = Node {
+            bounds,
+            first: left as u32,
+            count: 0,
+        };
+        work.push((left + 1, first + mid, end, depth + 1));
+        work.push((left, first, first + mid, depth + 1));
+    }
+    nodes
 }
 
 /// Depth after which splits fall back to the object median; see `build_with`.
@@ -159,14 +248,14 @@ fn find_split(
 ) -> Option<Split> {
     let parent_area = bounds.surface_area();
     let mut best: Option<Split> = None;
-    let mut bin = vec![EMPTY_BIN; bins];
-    let mut right_area = vec![0.0f32; bins];
-    let mut right_count = vec![0u32; bins];
+    let mut bin = [EMPTY_BIN; MAX_BINS];
+    let mut right_area = [0.0f32; MAX_BINS];
+    let mut right_count = [0u32; MAX_BINS];
     for axis in 0..3 {
         if centroid_bounds.extent()[axis] <= 0.0 {
             continue;
         }
-        bin.fill(EMPTY_BIN);
+        bin[..bins].fill(EMPTY_BIN);
         for &i in range {
             let b = &mut bin[bin_of(centroids[i as usize], centroid_bounds, axis, bins)];
             b.bounds = b.bounds.union(boxes[i as usize]);

@@ -7,12 +7,14 @@
 
 mod build;
 mod traverse;
+pub mod wide;
 
 pub use build::BuildOptions;
+pub use wide::WideBvh;
 
 use crate::geometry::{Aabb, Triangle};
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Node {
     pub bounds: Aabb,
     /// Inner node: index of the first of its two adjacent children.

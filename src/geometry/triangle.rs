@@ -84,6 +84,12 @@ impl RayShear {
         }
     }
 
+    /// The axes (`kx`, `ky`, `kz`) and shear constants (`sx`, `sy`, `sz`),
+    /// for the SIMD version of this test.
+    pub fn parts(&self) -> ([usize; 3], [f32; 3]) {
+        ([self.kx, self.ky, self.kz], [self.sx, self.sy, self.sz])
+    }
+
     /// The hit with `tmin < t < tmax`, if any. Hits either face.
     #[inline]
     pub fn intersect(&self, tri: &Triangle, tmin: f32, tmax: f32) -> Option<TriangleHit> {

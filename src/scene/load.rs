@@ -5,7 +5,7 @@ use super::desc::*;
 use super::obj::{load_obj, MtlMaterial};
 use super::texture::load_texture;
 use super::{format, trs, LoadReport, Scene, Settings, TriangleShading, NO_LIGHT};
-use crate::bvh::Bvh;
+use crate::bvh::WideBvh;
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::shapes::{self, MeshData};
@@ -122,7 +122,7 @@ pub fn load_desc(desc: SceneDesc) -> Result<Scene> {
     }
 
     let start = Instant::now();
-    let bvh = Bvh::build(&b.triangles);
+    let bvh = WideBvh::build(&b.triangles);
     b.report.bvh_build_seconds = start.elapsed().as_secs_f64();
 
     let output = match &desc.film.output {

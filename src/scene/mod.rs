@@ -10,7 +10,7 @@ pub mod trs;
 
 pub use load::{load, load_desc, parse_file};
 
-use crate::bvh::{Bvh, Hit};
+use crate::bvh::{Hit, WideBvh};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Ray, Triangle};
 use crate::light::{Light, LightSelector};
@@ -70,7 +70,7 @@ pub struct Scene {
     pub material_names: Vec<String>,
     pub lights: Vec<Light>,
     pub light_selector: LightSelector,
-    pub bvh: Bvh,
+    pub bvh: WideBvh,
     pub bounds: Aabb,
     pub report: LoadReport,
 }

@@ -1,0 +1,277 @@
+//! Closest-hit and any-hit traversal of the 4-wide BVH: one SIMD slab test
+//! for a node's four children, nearest child first, and one SIMD watertight
+//! test (Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection",
+//! 2013) for a leaf's four triangles. The triangle test computes exactly what
+//! the scalar `RayShear` computes, lane by lane, so both BVHs report the
+//! same distances bit for bit.
+
+use super::{
+    Node4, TriangleBlock, WideBvh, EMPTY_CHILD, LEAF_BIT, LEAF_COUNT_SHIFT, LEAF_INDEX_MASK,
+};
+use crate::bvh::Hit;
+use crate::geometry::triangle::RayShear;
+use crate::geometry::Ray;
+use wide::f32x4;
+
+/// A leaf reference's block index and triangle count.
+#[inline(always)]
+fn leaf(reference: u32) -> (usize, u32) {
+    (
+        (reference & LEAF_INDEX_MASK) as usize,
+        ((reference & !LEAF_BIT) >> LEAF_COUNT_SHIFT) + 1,
+    )
+}
+
+/// Each node visit pushes at most three children, and the depth is bounded
+/// by the binary builder's (64 SAH levels plus a median tail of at most 32).
+const STACK_SIZE: usize = 3 * 96 + 4;
+
+/// Slab distances are rounded; stretching the exit distance by a few ULPs
+/// keeps a hit that lies exactly on a box face from being culled (Ize,
+/// "Robust BVH Ray Traversal", 2013).
+const EXIT_STRETCH: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+/// The ray, splatted across lanes, with what every test reuses.
+struct RayLanes {
+    origin: [f32x4; 3],
+    inv_dir: [f32x4; 3],
+    /// Per axis, which row of `Node4::bounds` holds the near plane (the
+    /// minimum for a positive direction, the maximum for a negative one).
+    near_row: [usize; 3],
+    tmin: f32x4,
+    /// The watertight test's shear: the dominant axis `kz`, the other two,
+    /// and the shear constants (see `RayShear`).
+    k: [usize; 3],
+    shear: [f32x4; 3],
+}
+
+impl RayLanes {
+    fn new(ray: &Ray) -> RayLanes {
+        let d = ray.dir.to_array();
+        let o = ray.origin.to_array();
+        // A zero component would give 0 × ∞ = NaN for a ray lying in a slab
+        // plane; a tiny stand-in keeps every distance a number of the right sign.
+        let inv = d.map(|c| {
+            1.0 / if c.abs() < 1e-20 {
+                1e-20f32.copysign(c)
+            } else {
+                c
+            }
+        });
+        let (k, s) = RayShear::new(ray.origin, ray.dir).parts();
+        RayLanes {
+            origin: o.map(f32x4::splat),
+            inv_dir: inv.map(f32x4::splat),
+            near_row: [0, 1, 2].map(|a| if inv[a] >= 0.0 { a } else { a + 3 }),
+            tmin: f32x4::splat(ray.tmin),
+            k,
+            shear: s.map(f32x4::splat),
+        }
+    }
+
+    /// Entry distances into the four child boxes, and a bit mask of those
+    /// the ray enters before `tmax`.
+    #[inline(always)]
+    fn enter(&self, node: &Node4, tmax: f32) -> (f32x4, u32) {
+        let mut near = self.tmin;
+        let mut far = f32x4::splat(tmax);
+        for axis in 0..3 {
+            let near_plane = f32x4::new(node.bounds[self.near_row[axis]]);
+            let far_plane = f32x4::new(node.bounds[(self.near_row[axis] + 3) % 6]);
+            near = near.fast_max((near_plane - self.origin[axis]) * self.inv_dir[axis]);
+            far = far.fast_min((far_plane - self.origin[axis]) * self.inv_dir[axis]);
+        }
+        let mask = near.simd_le(far * f32x4::splat(EXIT_STRETCH)).to_bitmask();
+        (near, mask)
+    }
+
+    /// The watertight test on the first `count` triangles of a block: a bit
+    /// mask of lanes hit within (tmin, tmax), their distances, and the
+    /// barycentrics of vertices 1 and 2.
+    #[inline(always)]
+    fn intersect(
+        &self,
+        block: &TriangleBlock,
+        count: u32,
+        tmax: f32,
+    ) -> (u32, [f32; 4], [f32; 4], [f32; 4]) {
+        let [kx, ky, kz] = self.k;
+        let [sx, sy, sz] = self.shear;
+        // Vertex positions relative to the origin, sheared so the ray runs along +z.
+        let project = |v: &[[f32; 4]; 3]| {
+            let x = f32x4::new(v[kx]) - self.origin[kx];
+            let y = f32x4::new(v[ky]) - self.origin[ky];
+            let z = f32x4::new(v[kz]) - self.origin[kz];
+            (x - sx * z, y - sy * z, z)
+        };
+        let (ax, ay, az) = project(&block.v[0]);
+        let (bx, by, bz) = project(&block.v[1]);
+        let (cx, cy, cz) = project(&block.v[2]);
+        let mut u = cx * by - cy * bx;
+        let mut v = ax * cy - ay * cx;
+        let mut w = bx * ay - by * ax;
+        let lanes = (1u32 << count) - 1;
+        let zero = f32x4::ZERO;
+        let on_edge = (u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero)).to_bitmask() & lanes;
+        if on_edge != 0 {
+            // An edge passes (nearly) through the ray: decide those lanes
+            // exactly, as the scalar test does. Rare.
+            let (mut ua, mut va, mut wa) = (u.to_array(), v.to_array(), w.to_array());
+            let (ax, ay, bx, by, cx, cy) = (
+                ax.to_array(),
+                ay.to_array(),
+                bx.to_array(),
+                by.to_array(),
+                cx.to_array(),
+                cy.to_array(),
+            );
+            let d =
+                |p: f32, q: f32, r: f32, s: f32| (p as f64 * q as f64 - r as f64 * s as f64) as f32;
+            let mut m = on_edge;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                ua[l] = d(cx[l], by[l], cy[l], bx[l]);
+                va[l] = d(ax[l], cy[l], ay[l], cx[l]);
+                wa[l] = d(bx[l], ay[l], by[l], ax[l]);
+            }
+            (u, v, w) = (f32x4::new(ua), f32x4::new(va), f32x4::new(wa));
+        }
+        let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
+            & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
+        let det = u + v + w;
+        let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
+        let inv_det = f32x4::ONE / det;
+        let t = t_scaled * inv_det;
+        // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
+        let hit =
+            !outside & det.simd_ne(zero) & t.simd_gt(self.tmin) & t.simd_lt(f32x4::splat(tmax));
+        (
+            hit.to_bitmask() & lanes,
+            t.to_array(),
+            (v * inv_det).to_array(),
+            (w * inv_det).to_array(),
+        )
+    }
+}
+
+impl WideBvh {
+    /// The closest hit with `ray.tmin < t < ray.tmax`.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if self.root == EMPTY_CHILD {
+            return None;
+        }
+        let lanes = RayLanes::new(ray);
+        let mut tmax = ray.tmax;
+        let mut closest: Option<(u32, usize, f32, f32)> = None;
+        let mut stack = [(0u32, 0f32); STACK_SIZE];
+        let mut top = 0;
+        let mut current = self.root;
+        if !self.root_entered(ray) {
+            return None;
+        }
+        loop {
+            if current & LEAF_BIT == 0 {
+                let node = &self.nodes[current as usize];
+                let (near, mut mask) = lanes.enter(node, tmax);
+                let near = near.to_array();
+                // The entered children, nearest first (insertion sort of at most four).
+                let mut order = [(0u32, 0f32); 4];
+                let mut count = 0;
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let entry = (node.children[lane], near[lane]);
+                    let mut k = count;
+                    while k > 0 && order[k - 1].1 > entry.1 {
+                        order[k] = order[k - 1];
+                        k -= 1;
+                    }
+                    order[k] = entry;
+                    count += 1;
+                }
+                if count > 0 {
+                    for &entry in order[1..count].iter().rev() {
+                        stack[top] = entry;
+                        top += 1;
+                    }
+                    current = order[0].0;
+                    continue;
+                }
+            } else {
+                let (block, count) = leaf(current);
+                let (mut mask, t, b1, b2) = lanes.intersect(&self.blocks[block], count, tmax);
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if t[lane] < tmax {
+                        tmax = t[lane];
+                        closest = Some((block as u32, lane, b1[lane], b2[lane]));
+                    }
+                }
+            }
+            // Pop the next child, skipping those a closer hit has ruled out.
+            loop {
+                if top == 0 {
+                    return closest.map(|(block, lane, b1, b2)| Hit {
+                        triangle: self.blocks[block as usize].id[lane],
+                        t: tmax,
+                        b1,
+                        b2,
+                    });
+                }
+                top -= 1;
+                let (child, near) = stack[top];
+                if near <= tmax * EXIT_STRETCH {
+                    current = child;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Whether anything lies on the ray within (tmin, tmax): for shadow
+    /// rays, so it stops at the first hit it finds, in whatever order.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if self.root == EMPTY_CHILD || !self.root_entered(ray) {
+            return false;
+        }
+        let lanes = RayLanes::new(ray);
+        let mut stack = [0u32; STACK_SIZE];
+        let mut top = 0;
+        let mut current = self.root;
+        loop {
+            if current & LEAF_BIT == 0 {
+                let node = &self.nodes[current as usize];
+                let (_, mut mask) = lanes.enter(node, ray.tmax);
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    stack[top] = node.children[lane];
+                    top += 1;
+                }
+            } else {
+                let (block, count) = leaf(current);
+                if lanes.intersect(&self.blocks[block], count, ray.tmax).0 != 0 {
+                    return true;
+                }
+            }
+            if top == 0 {
+                return false;
+            }
+            top -= 1;
+            current = stack[top];
+        }
+    }
+
+    /// The root's own box, which no node holds: tested once per ray.
+    fn root_entered(&self, ray: &Ray) -> bool {
+        let inv = ray.dir.recip();
+        let t0 = (self.bounds.min - ray.origin) * inv;
+        let t1 = (self.bounds.max - ray.origin) * inv;
+        // `min`/`max` ignore a NaN (0 × ∞ in a slab's plane): conservative.
+        let near = t0.min(t1).max_element().max(ray.tmin);
+        let far = t0.max(t1).min_element().min(ray.tmax);
+        near <= far * EXIT_STRETCH
+    }
+}
