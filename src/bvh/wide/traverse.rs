@@ -11,6 +11,7 @@ use super::{
 use crate::bvh::Hit;
 use crate::geometry::triangle::RayShear;
 use crate::geometry::Ray;
+use std::mem::MaybeUninit;
 use wide::f32x4;
 
 /// A leaf reference's block index and triangle count.
@@ -25,6 +26,40 @@ fn leaf(reference: u32) -> (usize, u32) {
 /// Each node visit pushes at most three children, and the depth is bounded
 /// by the binary builder's (64 SAH levels plus a median tail of at most 32).
 const STACK_SIZE: usize = 3 * 96 + 4;
+
+/// The traversal stack, left uninitialised: zeroing two kilobytes on every
+/// ray cost more than the traversal itself in small scenes.
+struct Stack<T: Copy> {
+    entries: [MaybeUninit<T>; STACK_SIZE],
+    top: usize,
+}
+
+impl<T: Copy> Stack<T> {
+    #[inline(always)]
+    fn new() -> Self {
+        Stack {
+            entries: [const { MaybeUninit::uninit() }; STACK_SIZE],
+            top: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, entry: T) {
+        // Bounds-checked: an overflow panics rather than corrupting memory.
+        self.entries[self.top].write(entry);
+        self.top += 1;
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<T> {
+        if self.top == 0 {
+            return None;
+        }
+        self.top -= 1;
+        // SAFETY: every entry below `top` was written by `push`.
+        Some(unsafe { self.entries[self.top].assume_init() })
+    }
+}
 
 /// Slab distances are rounded; stretching the exit distance by a few ULPs
 /// keeps a hit that lies exactly on a box face from being culled (Ize,
@@ -164,8 +199,7 @@ impl WideBvh {
         let lanes = RayLanes::new(ray);
         let mut tmax = ray.tmax;
         let mut closest: Option<(u32, usize, f32, f32)> = None;
-        let mut stack = [(0u32, 0f32); STACK_SIZE];
-        let mut top = 0;
+        let mut stack = Stack::<(u32, f32)>::new();
         let mut current = self.root;
         if !self.root_entered(ray) {
             return None;
@@ -192,8 +226,7 @@ impl WideBvh {
                 }
                 if count > 0 {
                     for &entry in order[1..count].iter().rev() {
-                        stack[top] = entry;
-                        top += 1;
+                        stack.push(entry);
                     }
                     current = order[0].0;
                     continue;
@@ -212,16 +245,14 @@ impl WideBvh {
             }
             // Pop the next child, skipping those a closer hit has ruled out.
             loop {
-                if top == 0 {
+                let Some((child, near)) = stack.pop() else {
                     return closest.map(|(block, lane, b1, b2)| Hit {
                         triangle: self.blocks[block as usize].id[lane],
                         t: tmax,
                         b1,
                         b2,
                     });
-                }
-                top -= 1;
-                let (child, near) = stack[top];
+                };
                 if near <= tmax * EXIT_STRETCH {
                     current = child;
                     break;
@@ -237,8 +268,7 @@ impl WideBvh {
             return false;
         }
         let lanes = RayLanes::new(ray);
-        let mut stack = [0u32; STACK_SIZE];
-        let mut top = 0;
+        let mut stack = Stack::<u32>::new();
         let mut current = self.root;
         loop {
             if current & LEAF_BIT == 0 {
@@ -247,8 +277,7 @@ impl WideBvh {
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
-                    stack[top] = node.children[lane];
-                    top += 1;
+                    stack.push(node.children[lane]);
                 }
             } else {
                 let (block, count) = leaf(current);
@@ -256,11 +285,10 @@ impl WideBvh {
                     return true;
                 }
             }
-            if top == 0 {
-                return false;
+            match stack.pop() {
+                Some(next) => current = next,
+                None => return false,
             }
-            top -= 1;
-            current = stack[top];
         }
     }
 
