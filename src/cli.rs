@@ -1,5 +1,6 @@
 //! The command line: `tracer render` and `tracer info`.
 
+use crate::bench::{BenchOptions, RayKind};
 use crate::film::write::{write_image, ImageFormat};
 use crate::light::Light;
 use crate::render::{render, render_strategies, RenderOptions, MAX_STRATEGY_LENGTH};
@@ -30,6 +31,33 @@ pub enum Command {
         /// The scene file.
         scene: PathBuf,
     },
+    /// Measure BVH build time and ray throughput on a mesh (.obj) or a scene.
+    Bench(BenchArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// An OBJ mesh, or a scene file (whose camera then makes the primary rays).
+    pub input: PathBuf,
+    /// Ray sets to trace (repeatable).
+    #[arg(long, value_enum, default_values_t = [RayKind::All])]
+    pub rays: Vec<RayKind>,
+    /// Trace rays from this file instead: 32-byte little-endian f32 records
+    /// (origin x y z, tmin, direction x y z, tmax).
+    #[arg(long, value_name = "FILE")]
+    pub rays_file: Option<PathBuf>,
+    /// Thread counts to measure, e.g. `1,2` (default: 1 and every core).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..1025))]
+    pub threads: Vec<u32>,
+    /// Timed runs per figure; the median is reported.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..1000))]
+    pub runs: u32,
+    /// Also write each generated ray set to DIR/<kind>.rays, for other tools.
+    #[arg(long, value_name = "DIR")]
+    pub save_rays: Option<PathBuf>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Flags override the scene's `film` and `render` blocks.
@@ -83,6 +111,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => run_render(&args),
         Command::Info { scene } => run_info(&scene),
+        Command::Bench(args) => run_bench(&args),
     }
 }
 
@@ -198,6 +227,33 @@ fn write_strategies(scene: &Scene, options: &RenderOptions, dir: &std::path::Pat
         scene.settings.max_depth.min(MAX_STRATEGY_LENGTH),
         dir.display()
     );
+    Ok(())
+}
+
+fn run_bench(args: &BenchArgs) -> Result<()> {
+    let mut threads: Vec<usize> = args.threads.iter().map(|&t| t as usize).collect();
+    if threads.is_empty() {
+        threads = vec![
+            1,
+            std::thread::available_parallelism().map_or(1, |n| n.get()),
+        ];
+    }
+    threads.dedup();
+    let options = BenchOptions {
+        kinds: args.rays.clone(),
+        rays_file: args.rays_file.clone(),
+        threads,
+        runs: args.runs as usize,
+        save_rays: args.save_rays.clone(),
+    };
+    let report = crate::bench::run(&args.input, &options)?;
+    if args.json {
+        let json = serde_json::to_string_pretty(&report)
+            .map_err(|e| Error::Unsupported(format!("cannot write JSON: {e}")))?;
+        println!("{json}");
+    } else {
+        print!("{}", report.table());
+    }
     Ok(())
 }
 

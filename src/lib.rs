@@ -6,6 +6,7 @@
 //! [`integrator`] traces it through [`bvh`], [`material`] and [`light`] →
 //! [`film`] accumulates and writes the image.
 
+pub mod bench;
 pub mod bvh;
 pub mod camera;
 pub mod cli;

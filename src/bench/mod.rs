@@ -1,0 +1,279 @@
+//! `tracer bench`: BVH build and ray throughput on a mesh or a scene, for
+//! comparing builds, machines and other ray tracers on identical rays.
+
+pub mod meshes;
+pub mod rays;
+
+use crate::bvh::{BuildOptions, WideBvh};
+use crate::camera::Camera;
+use crate::geometry::{Aabb, Ray, Triangle};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Which generated ray sets to trace.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RayKind {
+    Primary,
+    Diffuse,
+    Incoherent,
+    Shadow,
+    All,
+}
+
+pub struct BenchOptions {
+    pub kinds: Vec<RayKind>,
+    /// Trace these rays instead of generated ones.
+    pub rays_file: Option<PathBuf>,
+    /// Thread counts to measure, each in a pool of its own.
+    pub threads: Vec<usize>,
+    /// Timed repetitions per measurement; the median is reported.
+    pub runs: usize,
+    /// Write each generated ray set here, in the rays-file format.
+    pub save_rays: Option<PathBuf>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct BuildFigures {
+    pub threads: usize,
+    pub seconds: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct TraceFigures {
+    pub rays: String,
+    /// `closest` or `any`.
+    pub query: &'static str,
+    pub threads: usize,
+    pub count: usize,
+    pub mrays_per_second: f64,
+    pub hits: usize,
+    /// Sum of closest-hit distances (closest-hit queries only), to check
+    /// two implementations against each other.
+    pub distance_sum: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct BenchReport {
+    pub input: String,
+    pub triangles: usize,
+    pub builds: Vec<BuildFigures>,
+    pub sah_cost: f32,
+    pub binary_sah_cost: f32,
+    pub nodes: usize,
+    pub leaves: usize,
+    pub memory_bytes: usize,
+    pub bytes_per_triangle: f64,
+    pub traces: Vec<TraceFigures>,
+}
+
+/// The triangles of an OBJ mesh, or of a scene (with its camera).
+fn load(path: &Path) -> Result<(Vec<Triangle>, Option<Camera>)> {
+    let is_obj = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if is_obj {
+        Ok((
+            meshes::obj_triangles(path).map_err(Error::Unsupported)?,
+            None,
+        ))
+    } else {
+        let mut scene = crate::scene::load(path)?;
+        scene.set_resolution(rays::PRIMARY_RESOLUTION, rays::PRIMARY_RESOLUTION);
+        Ok((scene.triangles, Some(scene.camera)))
+    }
+}
+
+fn pool(threads: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Unsupported(format!("cannot start worker threads: {e}")))
+}
+
+/// The median of `runs` timings of `f`, in seconds.
+fn median_seconds(runs: usize, mut f: impl FnMut()) -> f64 {
+    let mut times: Vec<f64> = (0..runs.max(1))
+        .map(|_| {
+            let start = Instant::now();
+            f();
+            start.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// Rays per parallel work item: large enough to amortise scheduling.
+const CHUNK: usize = 4096;
+
+fn trace_closest(bvh: &WideBvh, rays: &[Ray]) -> (usize, f64) {
+    rays.par_chunks(CHUNK)
+        .map(|chunk| {
+            chunk
+                .iter()
+                .fold((0usize, 0f64), |(n, sum), r| match bvh.intersect(r) {
+                    Some(h) => (n + 1, sum + h.t as f64),
+                    None => (n, sum),
+                })
+        })
+        .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+}
+
+fn trace_any(bvh: &WideBvh, rays: &[Ray]) -> usize {
+    rays.par_chunks(CHUNK)
+        .map(|chunk| chunk.iter().filter(|r| bvh.occluded(r)).count())
+        .sum()
+}
+
+pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
+    let (triangles, camera) = load(path)?;
+    let mut builds = Vec::new();
+    let mut bvh = None;
+    for &threads in &options.threads {
+        let pool = pool(threads)?;
+        let build_options = BuildOptions {
+            parallel: threads > 1,
+            ..BuildOptions::default()
+        };
+        let seconds = median_seconds(options.runs.min(3), || {
+            bvh = Some(pool.install(|| WideBvh::build_with(&triangles, &build_options)));
+        });
+        builds.push(BuildFigures { threads, seconds });
+    }
+    let bvh = match bvh {
+        Some(b) => b,
+        None => WideBvh::build(&triangles),
+    };
+    let bounds = bvh.bounds();
+    let sets = ray_sets(&bvh, &triangles, camera, bounds, options)?;
+    if let Some(dir) = &options.save_rays {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+            path: dir.clone(),
+            source,
+        })?;
+        for (name, rays) in &sets {
+            rays::write_file(&dir.join(format!("{name}.rays")), rays)?;
+        }
+    }
+
+    let mut traces = Vec::new();
+    for (name, rays) in &sets {
+        for &threads in &options.threads {
+            let pool = pool(threads)?;
+            let (hits, distance_sum) = pool.install(|| trace_closest(&bvh, rays));
+            let seconds = median_seconds(options.runs, || {
+                pool.install(|| trace_closest(&bvh, rays));
+            });
+            traces.push(TraceFigures {
+                rays: name.clone(),
+                query: "closest",
+                threads,
+                count: rays.len(),
+                mrays_per_second: rays.len() as f64 / seconds / 1e6,
+                hits,
+                distance_sum,
+            });
+            let hits = pool.install(|| trace_any(&bvh, rays));
+            let seconds = median_seconds(options.runs, || {
+                pool.install(|| trace_any(&bvh, rays));
+            });
+            traces.push(TraceFigures {
+                rays: name.clone(),
+                query: "any",
+                threads,
+                count: rays.len(),
+                mrays_per_second: rays.len() as f64 / seconds / 1e6,
+                hits,
+                distance_sum: 0.0,
+            });
+        }
+    }
+    let report = bvh.report();
+    Ok(BenchReport {
+        input: path.display().to_string(),
+        triangles: triangles.len(),
+        builds,
+        sah_cost: report.sah_cost,
+        binary_sah_cost: report.binary_sah_cost,
+        nodes: report.nodes,
+        leaves: report.leaves,
+        memory_bytes: bvh.memory_bytes(),
+        bytes_per_triangle: bvh.memory_bytes() as f64 / triangles.len().max(1) as f64,
+        traces,
+    })
+}
+
+fn ray_sets(
+    bvh: &WideBvh,
+    triangles: &[Triangle],
+    camera: Option<Camera>,
+    bounds: Aabb,
+    options: &BenchOptions,
+) -> Result<Vec<(String, Vec<Ray>)>> {
+    if let Some(file) = &options.rays_file {
+        let name = file
+            .file_stem()
+            .map_or("file".into(), |s| s.to_string_lossy().into_owned());
+        return Ok(vec![(name, rays::read_file(file)?)]);
+    }
+    let wants = |k: RayKind| options.kinds.contains(&k) || options.kinds.contains(&RayKind::All);
+    let camera = camera.unwrap_or_else(|| rays::framing_camera(bounds));
+    let primary = rays::primary(&camera);
+    let hits = rays::hit_points(bvh, triangles, &primary);
+    let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element();
+    let mut sets = Vec::new();
+    if wants(RayKind::Primary) {
+        sets.push(("primary".to_string(), primary));
+    }
+    if wants(RayKind::Diffuse) {
+        sets.push(("diffuse".to_string(), rays::diffuse(&hits, magnitude)));
+    }
+    if wants(RayKind::Incoherent) {
+        sets.push((
+            "incoherent".to_string(),
+            rays::incoherent(bounds, rays::INCOHERENT_COUNT),
+        ));
+    }
+    if wants(RayKind::Shadow) {
+        sets.push(("shadow".to_string(), rays::shadow(&hits, bounds, magnitude)));
+    }
+    Ok(sets)
+}
+
+impl BenchReport {
+    /// A human-readable table.
+    pub fn table(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        let _ = writeln!(s, "{}: {} triangles", self.input, self.triangles);
+        for b in &self.builds {
+            let _ = writeln!(
+                s,
+                "build      {:>2} thread(s): {:.3} s",
+                b.threads, b.seconds
+            );
+        }
+        let _ = writeln!(
+            s,
+            "bvh        4-wide: SAH cost {:.2} (binary before collapse {:.2}), {} nodes, {} leaves, {:.1} bytes/triangle",
+            self.sah_cost, self.binary_sah_cost, self.nodes, self.leaves, self.bytes_per_triangle
+        );
+        let _ = writeln!(
+            s,
+            "{:<12} {:<8} {:>7} {:>9} {:>10} {:>9} {:>16}",
+            "rays", "query", "threads", "count", "Mrays/s", "hits", "distance sum"
+        );
+        for t in &self.traces {
+            let _ = writeln!(
+                s,
+                "{:<12} {:<8} {:>7} {:>9} {:>10.2} {:>9} {:>16.6e}",
+                t.rays, t.query, t.threads, t.count, t.mrays_per_second, t.hits, t.distance_sum
+            );
+        }
+        s
+    }
+}
