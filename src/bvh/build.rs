@@ -1,15 +1,23 @@
 //! Top-down binned SAH construction (Wald, "On fast Construction of SAH-based
 //! Bounding Volume Hierarchies", 2007): centroids are binned along each axis,
 //! and the split plane between bins with the lowest SAH cost wins.
+//!
+//! Speed comes from memory order: each triangle's box and index live in one
+//! 32-byte record, and the records themselves are partitioned, so every pass
+//! reads memory front to back. One pass bins all three axes; the winning
+//! split's bin sweep already gives both children's bounds; and the partition
+//! pass computes both children's centroid bounds. Big subtrees are built in
+//! parallel with `rayon::join`.
 
 use super::{Bvh, Node, INTERSECTION_COST, TRAVERSAL_COST};
 use crate::geometry::{Aabb, Triangle};
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 #[derive(Clone, Debug)]
 pub struct BuildOptions {
-    /// Bins per axis (2 to 32). 16 is within a few per cent of a full sweep's SAH cost.
+    /// Bins per axis (2 to 16). 16 is within a few per cent of a full sweep's
+    /// SAH cost. Small nodes use fewer: one per triangle at most.
     pub bins: usize,
     /// A node with more triangles than this is always split. Four matches the
     /// wide BVH's leaves, which test four triangles at once.
@@ -28,136 +36,375 @@ impl Default for BuildOptions {
     }
 }
 
-#[derive(Clone, Copy)]
-struct Bin {
-    bounds: Aabb,
-    count: u32,
-}
-
-const EMPTY_BIN: Bin = Bin {
-    bounds: Aabb::EMPTY,
-    count: 0,
-};
-
-const MAX_BINS: usize = 32;
+const MAX_BINS: usize = 16;
 
 /// Below this many triangles a subtree is built on the calling thread: the
 /// fork costs more than it saves, and big subtrees already keep every thread busy.
 const PARALLEL_MIN: usize = 16 * 1024;
 
-struct Split {
-    axis: usize,
-    /// Triangles in bins `< bin` go left.
-    bin: usize,
-    cost: f32,
+/// Depth after which splits fall back to the object median: past it the SAH
+/// is peeling off a few triangles at a time (exponentially spaced
+/// centroids), and the median bounds the depth, and with it the traversal stack.
+const MAX_SAH_DEPTH: usize = 64;
+
+/// A triangle's bounds and index, in one 32-byte record that the build
+/// moves around. Four-lane vectors so that unions are one SIMD min and max;
+/// the index rides in the minimum's fourth lane.
+#[derive(Clone, Copy, Debug)]
+struct Prim {
+    min: Vec4,
+    max: Vec4,
 }
 
-/// What every subtree's construction reads.
-struct Context<'a> {
-    boxes: &'a [Aabb],
-    centroids: &'a [Vec3],
-    bins: usize,
-    options: &'a BuildOptions,
+impl Prim {
+    fn new(bounds: Aabb, index: usize) -> Prim {
+        Prim {
+            min: bounds.min.extend(f32::from_bits(index as u32)),
+            max: bounds.max.extend(0.0),
+        }
+    }
+
+    fn index(&self) -> u32 {
+        self.min.w.to_bits()
+    }
+
+    /// Twice the centroid: the factor of two cancels in every comparison.
+    #[inline(always)]
+    fn centroid2(&self) -> Vec3 {
+        (self.min + self.max).truncate()
+    }
 }
 
-const UNSET: Node = Node {
-    bounds: Aabb::EMPTY,
-    first: 0,
+/// A box as two four-lane vectors (the fourth lane is ignored).
+#[derive(Clone, Copy)]
+struct Box4 {
+    min: Vec4,
+    max: Vec4,
+}
+
+impl Box4 {
+    const EMPTY: Box4 = Box4 {
+        min: Vec4::splat(f32::INFINITY),
+        max: Vec4::splat(f32::NEG_INFINITY),
+    };
+
+    #[inline(always)]
+    fn grow(&mut self, p: &Prim) {
+        self.min = self.min.min(p.min);
+        self.max = self.max.max(p.max);
+    }
+
+    #[inline(always)]
+    fn union(self, o: Box4) -> Box4 {
+        Box4 {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    fn aabb(self) -> Aabb {
+        Aabb {
+            min: self.min.truncate(),
+            max: self.max.truncate(),
+        }
+    }
+
+    #[inline(always)]
+    fn half_area(self) -> f32 {
+        let e = (self.max - self.min).truncate().max(Vec3::ZERO);
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+}
+
+/// A range of prims with its bounds and the bounds of its (doubled) centroids.
+#[derive(Clone, Copy)]
+struct Range {
+    bounds: Aabb,
+    centroids: Aabb,
+}
+
+#[derive(Clone, Copy)]
+struct Bin {
+    bounds: Box4,
+    count: u32,
+}
+
+const EMPTY_BIN: Bin = Bin {
+    bounds: Box4::EMPTY,
     count: 0,
 };
 
+/// The best plane found: prims in bins `< bin` along `axis` go left.
+struct Split {
+    axis: usize,
+    bin: usize,
+    cost: f32,
+    left: Aabb,
+    right: Aabb,
+}
+
+/// Maps doubled centroids to bins along each axis.
+struct Binner {
+    origin: Vec3,
+    scale: Vec3,
+    bins: usize,
+}
+
+impl Binner {
+    fn new(centroids: Aabb, bins: usize) -> Binner {
+        let extent = centroids.extent();
+        // Slightly under bins/extent so the largest centroid lands in the last bin.
+        let scale = Vec3::select(
+            extent.cmpgt(Vec3::ZERO),
+            Vec3::splat(bins as f32 * (1.0 - 1e-6)) / extent,
+            Vec3::ZERO,
+        );
+        Binner {
+            origin: centroids.min,
+            scale,
+            bins,
+        }
+    }
+
+    #[inline(always)]
+    fn bin_of(&self, c: Vec3, axis: usize) -> usize {
+        let b = ((c[axis] - self.origin[axis]) * self.scale[axis]) as usize;
+        b.min(self.bins - 1)
+    }
+
+    #[inline(always)]
+    fn bins_of(&self, c: Vec3) -> [usize; 3] {
+        let b = ((c - self.origin) * self.scale).as_uvec3();
+        let last = self.bins as u32 - 1;
+        [
+            b.x.min(last) as usize,
+            b.y.min(last) as usize,
+            b.z.min(last) as usize,
+        ]
+    }
+}
+
 impl Bvh {
     pub fn build_with(triangles: &[Triangle], options: &BuildOptions) -> Bvh {
-        let boxes: Vec<Aabb> = if options.parallel {
-            triangles
-                .par_iter()
-                .map(|t| Aabb::from_points(&t.v))
-                .collect()
+        let make = |(i, t): (usize, &Triangle)| Prim::new(Aabb::from_points(&t.v), i);
+        let mut prims: Vec<Prim> = if options.parallel {
+            triangles.par_iter().enumerate().map(make).collect()
         } else {
-            triangles.iter().map(|t| Aabb::from_points(&t.v)).collect()
+            triangles.iter().enumerate().map(make).collect()
         };
-        let centroids: Vec<Vec3> = boxes.iter().map(|b| b.center()).collect();
-        let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
-        let context = Context {
-            boxes: &boxes,
-            centroids: &centroids,
+        let options = BuildOptions {
             bins: options.bins.clamp(2, MAX_BINS),
-            options,
+            max_leaf_size: options.max_leaf_size.max(1),
+            parallel: options.parallel,
         };
         // No root at all for no triangles: traversal checks for this and reports no hit.
-        let nodes = if triangles.is_empty() {
+        let nodes = if prims.is_empty() {
             Vec::new()
         } else {
-            build_subtree(&context, &mut order, 0, 0)
+            let range = measure(&prims);
+            build_subtree(&options, &mut prims, range, 0, 0)
         };
+        let original_index: Vec<u32> = prims.iter().map(Prim::index).collect();
         Bvh {
-            triangles: order.iter().map(|&i| triangles[i as usize]).collect(),
-            original_index: order,
+            triangles: original_index
+                .iter()
+                .map(|&i| triangles[i as usize])
+                .collect(),
+            original_index,
             nodes,
         }
     }
 }
 
-/// Bounds of a range, and where to split it (0 for a leaf).
-fn decide(context: &Context, range: &mut [u32], depth: usize) -> (Aabb, usize) {
-    let (boxes, centroids) = (context.boxes, context.centroids);
-    let bounds = range
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(boxes[i as usize]));
-    let centroid_bounds = range
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.grow(centroids[i as usize]));
-    let count = range.len();
-    let max_leaf = context.options.max_leaf_size.max(1);
-    let leaf_cost = count as f32 * INTERSECTION_COST;
-    let bins = context.bins;
-    let split = find_split(range, boxes, centroids, centroid_bounds, bins, bounds);
-    let mid = match split {
-        // Past this depth the SAH is peeling off a few triangles at a time
-        // (exponentially spaced centroids): split at the median to bound the
-        // depth, and with it the traversal stack.
-        _ if depth >= MAX_SAH_DEPTH && count > max_leaf => {
-            median_split(range, centroids, centroid_bounds)
-        }
-        Some(s) if s.cost < leaf_cost || count > max_leaf => partition(range, |i| {
-            bin_of(centroids[i as usize], centroid_bounds, s.axis, bins) < s.bin
-        }),
-        // All centroids coincide: no plane separates them, so halve by index.
-        None if count > max_leaf => median_split(range, centroids, centroid_bounds),
-        _ => 0,
-    };
-    (bounds, if mid == count { 0 } else { mid })
+fn measure(prims: &[Prim]) -> Range {
+    let mut bounds = Box4::EMPTY;
+    let mut centroids = Aabb::EMPTY;
+    for p in prims {
+        bounds.grow(p);
+        centroids = centroids.grow(p.centroid2());
+    }
+    Range {
+        bounds: bounds.aabb(),
+        centroids,
+    }
 }
 
-/// Builds the subtree over `order`, whose first entry is triangle `offset`
+/// Where to split a range: `None` makes it a leaf; otherwise the count
+/// going left and both children's ranges. Reorders `prims` accordingly.
+fn split(
+    options: &BuildOptions,
+    prims: &mut [Prim],
+    range: Range,
+    depth: usize,
+) -> Option<(usize, Range, Range)> {
+    let count = prims.len();
+    let must_split = count > options.max_leaf_size;
+    if count <= 1 {
+        return None;
+    }
+    if depth >= MAX_SAH_DEPTH || range.centroids.extent().max_element() <= 0.0 {
+        // Too deep, or all centroids coincide and no plane separates them.
+        return must_split.then(|| median_split(prims, range));
+    }
+    // More bins than triangles only adds empty planes to sweep.
+    let bins = options.bins.min(count.max(4));
+    let best = find_split(prims, range, bins);
+    let leaf_cost = count as f32 * INTERSECTION_COST;
+    if best.cost >= leaf_cost && !must_split {
+        return None;
+    }
+    let binner = Binner::new(range.centroids, bins);
+    let (axis, bin) = (best.axis, best.bin);
+    let goes_left = |p: &Prim| binner.bin_of(p.centroid2(), axis) < bin;
+    let (mid, left_centroids, right_centroids) = partition(prims, goes_left);
+    if mid == 0 || mid == count {
+        // Cannot happen with a proper centroid extent, but never loop forever.
+        return must_split.then(|| median_split(prims, range));
+    }
+    Some((
+        mid,
+        Range {
+            bounds: best.left,
+            centroids: left_centroids,
+        },
+        Range {
+            bounds: best.right,
+            centroids: right_centroids,
+        },
+    ))
+}
+
+/// Bins every prim along all three axes in one pass, then sweeps each axis
+/// for the cheapest plane.
+fn find_split(prims: &[Prim], range: Range, bins: usize) -> Split {
+    let binner = Binner::new(range.centroids, bins);
+    let mut binned = [[EMPTY_BIN; MAX_BINS]; 3];
+    for p in prims {
+        let b = binner.bins_of(p.centroid2());
+        for axis in 0..3 {
+            let bin = &mut binned[axis][b[axis]];
+            bin.bounds.grow(p);
+            bin.count += 1;
+        }
+    }
+    let parent_area = {
+        let e = range.bounds.extent();
+        (e.x * e.y + e.y * e.z + e.z * e.x).max(f32::MIN_POSITIVE)
+    };
+    let mut best = Split {
+        axis: 0,
+        bin: 0,
+        cost: f32::INFINITY,
+        left: Aabb::EMPTY,
+        right: Aabb::EMPTY,
+    };
+    let extent = range.centroids.extent();
+    for (axis, bin) in binned.iter().enumerate() {
+        if extent[axis] <= 0.0 {
+            continue;
+        }
+        // Sweep from the right, then from the left, evaluating each plane once.
+        let mut right = [(Box4::EMPTY, 0u32); MAX_BINS];
+        let (mut acc, mut n) = (Box4::EMPTY, 0);
+        for k in (1..bins).rev() {
+            acc = acc.union(bin[k].bounds);
+            n += bin[k].count;
+            right[k] = (acc, n);
+        }
+        let (mut acc, mut n) = (Box4::EMPTY, 0);
+        for k in 1..bins {
+            acc = acc.union(bin[k - 1].bounds);
+            n += bin[k - 1].count;
+            let (right_bounds, right_count) = right[k];
+            if n == 0 || right_count == 0 {
+                continue;
+            }
+            let cost = TRAVERSAL_COST
+                + INTERSECTION_COST
+                    * (acc.half_area() * n as f32 + right_bounds.half_area() * right_count as f32)
+                    / parent_area;
+            if cost < best.cost {
+                best = Split {
+                    axis,
+                    bin: k,
+                    cost,
+                    left: acc.aabb(),
+                    right: right_bounds.aabb(),
+                };
+            }
+        }
+    }
+    best
+}
+
+/// Moves the prims for which `goes_left` holds to the front; returns their
+/// count and the centroid bounds of both sides.
+fn partition(prims: &mut [Prim], goes_left: impl Fn(&Prim) -> bool) -> (usize, Aabb, Aabb) {
+    let (mut left, mut right) = (Aabb::EMPTY, Aabb::EMPTY);
+    let (mut i, mut j) = (0, prims.len());
+    while i < j {
+        if goes_left(&prims[i]) {
+            left = left.grow(prims[i].centroid2());
+            i += 1;
+        } else {
+            j -= 1;
+            right = right.grow(prims[i].centroid2());
+            prims.swap(i, j);
+        }
+    }
+    (i, left, right)
+}
+
+/// Splits at the median centroid along the widest centroid axis (by index
+/// when all centroids coincide).
+fn median_split(prims: &mut [Prim], range: Range) -> (usize, Range, Range) {
+    let e = range.centroids.extent();
+    let axis = if e.x >= e.y && e.x >= e.z {
+        0
+    } else if e.y >= e.z {
+        1
+    } else {
+        2
+    };
+    let mid = prims.len() / 2;
+    prims.select_nth_unstable_by(mid, |a, b| {
+        a.centroid2()[axis]
+            .total_cmp(&b.centroid2()[axis])
+            .then(a.index().cmp(&b.index()))
+    });
+    let (l, r) = prims.split_at(mid);
+    (mid, measure(l), measure(r))
+}
+
+/// Builds the subtree over `prims`, whose first entry is triangle `offset`
 /// in leaf order. Returns its nodes with the root first and siblings adjacent.
-fn build_subtree(context: &Context, order: &mut [u32], offset: usize, depth: usize) -> Vec<Node> {
-    if !context.options.parallel || order.len() < PARALLEL_MIN {
-        return build_sequential(context, order, offset, depth);
+fn build_subtree(
+    options: &BuildOptions,
+    prims: &mut [Prim],
+    range: Range,
+    offset: usize,
+    depth: usize,
+) -> Vec<Node> {
+    if !options.parallel || prims.len() < PARALLEL_MIN {
+        return build_sequential(options, prims, range, offset, depth);
     }
-    let (bounds, mid) = decide(context, order, depth);
-    if mid == 0 {
+    let Some((mid, left_range, right_range)) = split(options, prims, range, depth) else {
         return vec![Node {
-            bounds,
+            bounds: range.bounds,
             first: offset as u32,
-            count: order.len() as u32,
+            count: prims.len() as u32,
         }];
-    }
-    let (left_order, right_order) = order.split_at_mut(mid);
+    };
+    let (left_prims, right_prims) = prims.split_at_mut(mid);
     let (left, right) = rayon::join(
-        || build_subtree(context, left_order, offset, depth + 1),
-        || build_subtree(context, right_order, offset + mid, depth + 1),
+        || build_subtree(options, left_prims, left_range, offset, depth + 1),
+        || build_subtree(options, right_prims, right_range, offset + mid, depth + 1),
     );
-    // Layout: [root, left root, right root, rest of left, rest of right].
+    // Layout: [root, left root, right root, rest of left, rest of right],
+    // exactly what the sequential builder produces.
     let left_index = |i: u32| if i == 0 { 1 } else { i + 2 };
     let right_shift = left.len() as u32 + 1;
     let right_index = |i: u32| if i == 0 { 2 } else { i + right_shift };
-    let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
-    nodes.push(Node {
-        bounds,
-        first: 1,
-        count: 0,
-    });
     let relink = |n: &Node, map: &dyn Fn(u32) -> u32| {
         if n.is_leaf() {
             *n
@@ -168,6 +415,12 @@ fn build_subtree(context: &Context, order: &mut [u32], offset: usize, depth: usi
             }
         }
     };
+    let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
+    nodes.push(Node {
+        bounds: range.bounds,
+        first: 1,
+        count: 0,
+    });
     nodes.push(relink(&left[0], &left_index));
     nodes.push(relink(&right[0], &right_index));
     nodes.extend(left[1..].iter().map(|n| relink(n, &left_index)));
@@ -175,127 +428,45 @@ fn build_subtree(context: &Context, order: &mut [u32], offset: usize, depth: usi
     nodes
 }
 
+const UNSET: Node = Node {
+    bounds: Aabb::EMPTY,
+    first: 0,
+    count: 0,
+};
+
 fn build_sequential(
-    context: &Context,
-    order: &mut [u32],
+    options: &BuildOptions,
+    prims: &mut [Prim],
+    range: Range,
     offset: usize,
     depth: usize,
 ) -> Vec<Node> {
-    let mut nodes = Vec::with_capacity(order.len() / 2 + 1);
+    let mut nodes = Vec::with_capacity(prims.len() / 2 + 1);
     nodes.push(UNSET);
-    // Work list of (node, first, end, depth) ranges into `order`; an explicit
-    // stack keeps deep, unbalanced trees from overflowing the call stack.
-    let mut work = vec![(0usize, 0usize, order.len(), depth)];
-    while let Some((node, first, end, depth)) = work.pop() {
-        let range = &mut order[first..end];
-        let (bounds, mid) = decide(context, range, depth);
-        if mid == 0 {
+    // Work list of (node, first, end, range, depth); an explicit stack keeps
+    // deep, unbalanced trees from overflowing the call stack.
+    let mut work = vec![(0usize, 0usize, prims.len(), range, depth)];
+    while let Some((node, first, end, range, depth)) = work.pop() {
+        let Some((mid, left_range, right_range)) =
+            split(options, &mut prims[first..end], range, depth)
+        else {
             nodes[node] = Node {
-                bounds,
+                bounds: range.bounds,
                 first: (offset + first) as u32,
                 count: (end - first) as u32,
             };
             continue;
-        }
+        };
         let left = nodes.len();
         nodes.push(UNSET);
         nodes.push(UNSET);
         nodes[node] = Node {
-            bounds,
+            bounds: range.bounds,
             first: left as u32,
             count: 0,
         };
-        work.push((left + 1, first + mid, end, depth + 1));
-        work.push((left, first, first + mid, depth + 1));
+        work.push((left + 1, first + mid, end, right_range, depth + 1));
+        work.push((left, first, first + mid, left_range, depth + 1));
     }
     nodes
-}
-
-/// Depth after which splits fall back to the object median; see `build_with`.
-const MAX_SAH_DEPTH: usize = 64;
-
-/// Splits at the median centroid along the widest centroid axis (by index if all coincide).
-fn median_split(range: &mut [u32], centroids: &[Vec3], centroid_bounds: Aabb) -> usize {
-    let e = centroid_bounds.extent();
-    let axis = if e.x >= e.y && e.x >= e.z {
-        0
-    } else if e.y >= e.z {
-        1
-    } else {
-        2
-    };
-    let mid = range.len() / 2;
-    range.select_nth_unstable_by(mid, |&a, &b| {
-        centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
-    });
-    mid
-}
-
-fn bin_of(c: Vec3, centroid_bounds: Aabb, axis: usize, bins: usize) -> usize {
-    let lo = centroid_bounds.min[axis];
-    let extent = centroid_bounds.max[axis] - lo;
-    let b = ((c[axis] - lo) / extent * bins as f32) as usize;
-    b.min(bins - 1)
-}
-
-fn find_split(
-    range: &[u32],
-    boxes: &[Aabb],
-    centroids: &[Vec3],
-    centroid_bounds: Aabb,
-    bins: usize,
-    bounds: Aabb,
-) -> Option<Split> {
-    let parent_area = bounds.surface_area();
-    let mut best: Option<Split> = None;
-    let mut bin = [EMPTY_BIN; MAX_BINS];
-    let mut right_area = [0.0f32; MAX_BINS];
-    let mut right_count = [0u32; MAX_BINS];
-    for axis in 0..3 {
-        if centroid_bounds.extent()[axis] <= 0.0 {
-            continue;
-        }
-        bin[..bins].fill(EMPTY_BIN);
-        for &i in range {
-            let b = &mut bin[bin_of(centroids[i as usize], centroid_bounds, axis, bins)];
-            b.bounds = b.bounds.union(boxes[i as usize]);
-            b.count += 1;
-        }
-        // Sweep from the right, then from the left, evaluating each plane once.
-        let (mut acc, mut n) = (Aabb::EMPTY, 0);
-        for k in (1..bins).rev() {
-            acc = acc.union(bin[k].bounds);
-            n += bin[k].count;
-            right_area[k] = acc.surface_area();
-            right_count[k] = n;
-        }
-        let (mut acc, mut n) = (Aabb::EMPTY, 0);
-        for k in 1..bins {
-            acc = acc.union(bin[k - 1].bounds);
-            n += bin[k - 1].count;
-            if n == 0 || right_count[k] == 0 {
-                continue;
-            }
-            let cost = TRAVERSAL_COST
-                + INTERSECTION_COST
-                    * (acc.surface_area() * n as f32 + right_area[k] * right_count[k] as f32)
-                    / parent_area.max(f32::MIN_POSITIVE);
-            if best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Split { axis, bin: k, cost });
-            }
-        }
-    }
-    best
-}
-
-/// Moves the elements for which `goes_left` holds to the front; returns how many.
-fn partition(range: &mut [u32], goes_left: impl Fn(u32) -> bool) -> usize {
-    let mut mid = 0;
-    for i in 0..range.len() {
-        if goes_left(range[i]) {
-            range.swap(i, mid);
-            mid += 1;
-        }
-    }
-    mid
 }
