@@ -186,25 +186,7 @@ impl Binner {
 
 impl Bvh {
     pub fn build_with(triangles: &[Triangle], options: &BuildOptions) -> Bvh {
-        let make = |(i, t): (usize, &Triangle)| Prim::new(Aabb::from_points(&t.v), i);
-        let mut prims: Vec<Prim> = if options.parallel {
-            triangles.par_iter().enumerate().map(make).collect()
-        } else {
-            triangles.iter().enumerate().map(make).collect()
-        };
-        let options = BuildOptions {
-            bins: options.bins.clamp(2, MAX_BINS),
-            max_leaf_size: options.max_leaf_size.max(1),
-            parallel: options.parallel,
-        };
-        // No root at all for no triangles: traversal checks for this and reports no hit.
-        let nodes = if prims.is_empty() {
-            Vec::new()
-        } else {
-            let range = measure(&prims);
-            build_subtree(&options, &mut prims, range, 0, 0)
-        };
-        let original_index: Vec<u32> = prims.iter().map(Prim::index).collect();
+        let (nodes, original_index) = build_tree(triangles, options);
         Bvh {
             triangles: original_index
                 .iter()
@@ -214,6 +196,30 @@ impl Bvh {
             nodes,
         }
     }
+}
+
+/// The binary tree's nodes and the leaf order of the triangles (the
+/// caller's index of each), without gathering the triangles themselves.
+pub(super) fn build_tree(triangles: &[Triangle], options: &BuildOptions) -> (Vec<Node>, Vec<u32>) {
+    let make = |(i, t): (usize, &Triangle)| Prim::new(Aabb::from_points(&t.v), i);
+    let mut prims: Vec<Prim> = if options.parallel {
+        triangles.par_iter().enumerate().map(make).collect()
+    } else {
+        triangles.iter().enumerate().map(make).collect()
+    };
+    let options = BuildOptions {
+        bins: options.bins.clamp(2, MAX_BINS),
+        max_leaf_size: options.max_leaf_size.max(1),
+        parallel: options.parallel,
+    };
+    // No root at all for no triangles: traversal checks for this and reports no hit.
+    let nodes = if prims.is_empty() {
+        Vec::new()
+    } else {
+        let range = measure(&prims);
+        build_subtree(&options, &mut prims, range, 0, 0)
+    };
+    (nodes, prims.iter().map(Prim::index).collect())
 }
 
 fn measure(prims: &[Prim]) -> Range {
@@ -238,10 +244,13 @@ fn split(
     depth: usize,
 ) -> Option<(usize, Range, Range)> {
     let count = prims.len();
-    let must_split = count > options.max_leaf_size;
-    if count <= 1 {
+    // A range that fits a leaf becomes one without weighing a split: the
+    // wide BVH tests a leaf's (up to four) triangles in one SIMD step, so it
+    // would merge the two halves back into one leaf anyway.
+    if count <= options.max_leaf_size {
         return None;
     }
+    let must_split = true;
     if depth >= MAX_SAH_DEPTH || range.centroids.extent().max_element() <= 0.0 {
         // Too deep, or all centroids coincide and no plane separates them.
         return must_split.then(|| median_split(prims, range));
@@ -304,24 +313,24 @@ fn find_split(prims: &[Prim], range: Range, bins: usize) -> Split {
             continue;
         }
         // Sweep from the right, then from the left, evaluating each plane once.
-        let mut right = [(Box4::EMPTY, 0u32); MAX_BINS];
+        let mut right = [(0f32, 0u32); MAX_BINS];
         let (mut acc, mut n) = (Box4::EMPTY, 0);
         for k in (1..bins).rev() {
             acc = acc.union(bin[k].bounds);
             n += bin[k].count;
-            right[k] = (acc, n);
+            right[k] = (acc.half_area(), n);
         }
         let (mut acc, mut n) = (Box4::EMPTY, 0);
         for k in 1..bins {
             acc = acc.union(bin[k - 1].bounds);
             n += bin[k - 1].count;
-            let (right_bounds, right_count) = right[k];
+            let (right_area, right_count) = right[k];
             if n == 0 || right_count == 0 {
                 continue;
             }
             let cost = TRAVERSAL_COST
                 + INTERSECTION_COST
-                    * (acc.half_area() * n as f32 + right_bounds.half_area() * right_count as f32)
+                    * (acc.half_area() * n as f32 + right_area * right_count as f32)
                     / parent_area;
             if cost < best.cost {
                 best = Split {
@@ -329,10 +338,17 @@ fn find_split(prims: &[Prim], range: Range, bins: usize) -> Split {
                     bin: k,
                     cost,
                     left: acc.aabb(),
-                    right: right_bounds.aabb(),
+                    right: Aabb::EMPTY,
                 };
             }
         }
+    }
+    if best.cost.is_finite() {
+        let bins = &binned[best.axis][best.bin..bins];
+        best.right = bins
+            .iter()
+            .fold(Box4::EMPTY, |b, bin| b.union(bin.bounds))
+            .aabb();
     }
     best
 }

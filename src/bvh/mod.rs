@@ -70,23 +70,7 @@ impl Bvh {
 
     /// Expected cost of a random ray under the SAH, in units of one triangle test.
     pub fn sah_cost(&self) -> f32 {
-        let root_area = self.bounds().surface_area();
-        if root_area <= 0.0 {
-            return 0.0;
-        }
-        let total: f32 = self
-            .nodes
-            .iter()
-            .map(|n| {
-                let cost = if n.is_leaf() {
-                    n.count as f32 * INTERSECTION_COST
-                } else {
-                    TRAVERSAL_COST
-                };
-                n.bounds.surface_area() * cost
-            })
-            .sum();
-        total / root_area
+        sah_cost(&self.nodes)
     }
 
     pub fn leaf_count(&self) -> usize {
@@ -97,4 +81,28 @@ impl Bvh {
         self.nodes.len() * std::mem::size_of::<Node>()
             + self.triangles.len() * (std::mem::size_of::<Triangle>() + 4)
     }
+}
+
+/// Expected cost of a random ray through a binary tree under the SAH, in
+/// units of one triangle test.
+pub(crate) fn sah_cost(nodes: &[Node]) -> f32 {
+    let Some(root) = nodes.first() else {
+        return 0.0;
+    };
+    let root_area = root.bounds.surface_area();
+    if root_area <= 0.0 {
+        return 0.0;
+    }
+    let total: f32 = nodes
+        .iter()
+        .map(|n| {
+            let cost = if n.is_leaf() {
+                n.count as f32 * INTERSECTION_COST
+            } else {
+                TRAVERSAL_COST
+            };
+            n.bounds.surface_area() * cost
+        })
+        .sum();
+    total / root_area
 }

@@ -9,7 +9,7 @@ use super::{
     BuildReport, Node4, TriangleBlock, WideBvh, EMPTY_CHILD, LEAF_BIT, LEAF_COUNT_SHIFT,
     LEAF_INDEX_MASK,
 };
-use crate::bvh::{Bvh, Node};
+use crate::bvh::Node;
 use crate::geometry::{Aabb, Triangle};
 
 const EMPTY_BOUNDS: [[f32; 4]; 6] = [
@@ -22,7 +22,10 @@ const EMPTY_BOUNDS: [[f32; 4]; 6] = [
 ];
 
 struct Collapser<'a> {
-    binary: &'a Bvh,
+    binary: &'a [Node],
+    /// The caller's triangles, and the binary tree's leaf order of them.
+    triangles: &'a [Triangle],
+    order: &'a [u32],
     /// Per binary node: (first triangle in leaf order, triangle count) of its subtree.
     ranges: Vec<(u32, u32)>,
     nodes: Vec<Node4>,
@@ -30,27 +33,33 @@ struct Collapser<'a> {
 }
 
 impl WideBvh {
-    pub(in crate::bvh) fn collapse(binary: &Bvh) -> WideBvh {
+    pub(in crate::bvh) fn collapse(
+        binary: &[Node],
+        order: &[u32],
+        triangles: &[Triangle],
+    ) -> WideBvh {
         let mut c = Collapser {
             binary,
-            ranges: subtree_ranges(&binary.nodes),
-            nodes: Vec::with_capacity(binary.nodes.len() / 3 + 1),
-            blocks: Vec::with_capacity(binary.triangles.len() / 3 + 1),
+            triangles,
+            order,
+            ranges: subtree_ranges(binary),
+            nodes: Vec::with_capacity(binary.len() / 3 + 1),
+            blocks: Vec::with_capacity(order.len() / 3 + 1),
         };
-        let root = if binary.nodes.is_empty() {
+        let root = if binary.is_empty() {
             EMPTY_CHILD
         } else {
             c.emit(0)
         };
-        let bounds = binary.bounds();
+        let bounds = binary.first().map_or(Aabb::EMPTY, |n| n.bounds);
         let mut wide = WideBvh {
             root,
             bounds,
             report: BuildReport {
-                binary_sah_cost: binary.sah_cost(),
+                binary_sah_cost: crate::bvh::sah_cost(binary),
                 nodes: c.nodes.len(),
                 leaves: c.blocks.len(),
-                triangles: binary.triangles.len(),
+                triangles: order.len(),
                 ..BuildReport::default()
             },
             nodes: c.nodes,
@@ -103,7 +112,7 @@ fn subtree_ranges(nodes: &[Node]) -> Vec<(u32, u32)> {
 
 impl Collapser<'_> {
     fn is_leaf(&self, node: usize) -> bool {
-        self.binary.nodes[node].is_leaf() || self.ranges[node].1 <= 4
+        self.binary[node].is_leaf() || self.ranges[node].1 <= 4
     }
 
     /// Emits the subtree under binary node `node`; returns its child reference.
@@ -111,27 +120,26 @@ impl Collapser<'_> {
         if self.is_leaf(node) {
             return self.emit_leaf(node);
         }
-        let nodes = &self.binary.nodes;
+        let nodes = self.binary;
         let first = nodes[node].first as usize;
-        let mut children = vec![first, first + 1];
-        while children.len() < 4 {
-            let widest = children
-                .iter()
-                .enumerate()
-                .filter(|(_, &c)| !self.is_leaf(c))
-                .max_by(|(_, &a), (_, &b)| {
-                    let (a, b) = (
-                        nodes[a].bounds.surface_area(),
-                        nodes[b].bounds.surface_area(),
-                    );
-                    a.total_cmp(&b)
-                })
-                .map(|(k, _)| k);
+        let mut children = [first, first + 1, 0, 0];
+        let mut count = 2;
+        while count < 4 {
+            let mut widest = None;
+            let mut widest_area = f32::NEG_INFINITY;
+            for (k, &c) in children[..count].iter().enumerate() {
+                let area = nodes[c].bounds.surface_area();
+                if !self.is_leaf(c) && area > widest_area {
+                    (widest, widest_area) = (Some(k), area);
+                }
+            }
             let Some(k) = widest else { break };
-            let opened = children.swap_remove(k);
-            children.push(nodes[opened].first as usize);
-            children.push(nodes[opened].first as usize + 1);
+            let opened = nodes[children[k]].first as usize;
+            children[k] = opened;
+            children[count] = opened + 1;
+            count += 1;
         }
+        let children = &children[..count];
         let index = self.nodes.len();
         self.nodes.push(Node4 {
             bounds: EMPTY_BOUNDS,
@@ -162,13 +170,14 @@ impl Collapser<'_> {
         );
         for lane in 0..count as usize {
             let k = first as usize + lane;
-            let t: &Triangle = &self.binary.triangles[k];
+            let id = self.order[k];
+            let t: &Triangle = &self.triangles[id as usize];
             for (vertex, p) in t.v.iter().enumerate() {
                 for axis in 0..3 {
                     block.v[vertex][axis][lane] = p[axis];
                 }
             }
-            block.id[lane] = self.binary.original_index[k];
+            block.id[lane] = id;
         }
         let index = self.blocks.len() as u32;
         assert!(

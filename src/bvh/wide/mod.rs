@@ -16,7 +16,7 @@
 mod collapse;
 mod traverse;
 
-use super::{BuildOptions, Bvh};
+use super::BuildOptions;
 use crate::geometry::{Aabb, Triangle};
 
 /// A child reference with this bit set names a leaf block, not a node; the
@@ -84,8 +84,8 @@ impl WideBvh {
             max_leaf_size: options.max_leaf_size.clamp(1, 4),
             ..options.clone()
         };
-        let binary = Bvh::build_with(triangles, &options);
-        let mut wide = WideBvh::collapse(&binary);
+        let (binary, order) = super::build::build_tree(triangles, &options);
+        let mut wide = WideBvh::collapse(&binary, &order, triangles);
         wide.report.seconds = start.elapsed().as_secs_f64();
         wide
     }
