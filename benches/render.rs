@@ -1,22 +1,37 @@
-//! Path tracing throughput on the bundled scenes, in camera samples per second.
+//! Rendering throughput of the three integrators on the bundled Cornell box
+//! and caustic scene at 256 × 256 on two threads, in camera samples per
+//! second (criterion's elements per second). Equal-time error against long
+//! references comes from `benches/equal-time.sh`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use std::time::Duration;
 use tracer::render::{render, RenderOptions};
+use tracer::scene::desc::IntegratorKind;
 
 fn benches(c: &mut Criterion) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut group = c.benchmark_group("render/pt");
-    group.sample_size(10);
+    let options = RenderOptions {
+        threads: Some(2),
+        progress: false,
+    };
     for name in ["cornell-box", "cornell-caustics"] {
-        let mut scene = tracer::scene::load(&root.join(format!("scenes/{name}.json"))).unwrap();
-        scene.set_resolution(128, 128);
-        scene.settings.spp = 4;
-        group.throughput(Throughput::Elements(128 * 128 * 4));
-        group.bench_function(name, |b| {
-            b.iter(|| render(&scene, &RenderOptions::default()).unwrap())
-        });
+        let mut group = c.benchmark_group(format!("render/{name}"));
+        group.sample_size(10);
+        group.measurement_time(Duration::from_secs(8));
+        for (integrator, label, spp) in [
+            (IntegratorKind::Pt, "pt", 4),
+            (IntegratorKind::Lt, "lt", 2),
+            (IntegratorKind::Bdpt, "bdpt", 1),
+        ] {
+            let mut scene = tracer::scene::load(&root.join(format!("scenes/{name}.json"))).unwrap();
+            scene.set_resolution(256, 256);
+            scene.settings.integrator = integrator;
+            scene.settings.spp = spp;
+            group.throughput(Throughput::Elements(256 * 256 * spp as u64));
+            group.bench_function(label, |b| b.iter(|| render(&scene, &options).unwrap()));
+        }
+        group.finish();
     }
-    group.finish();
 }
 
 criterion_group!(render_benches, benches);

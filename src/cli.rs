@@ -1,7 +1,7 @@
 //! The command line: `tracer render` and `tracer info`.
 
 use crate::bench::{BenchOptions, RayKind};
-use crate::film::write::{write_image, ImageFormat};
+use crate::film::write::{read_linear, write_image, ImageFormat};
 use crate::light::Light;
 use crate::render::{render, render_strategies, RenderOptions, MAX_STRATEGY_LENGTH};
 use crate::scene::desc::{Display, IntegratorKind, Tonemap};
@@ -33,6 +33,9 @@ pub enum Command {
     },
     /// Measure BVH build time and ray throughput on a mesh (.obj) or a scene.
     Bench(BenchArgs),
+    /// Relative MSE of a linear image (.pfm, .exr) against a reference:
+    /// the mean over pixels and channels of (image − reference)² / (reference² + 0.01).
+    Compare { image: PathBuf, reference: PathBuf },
 }
 
 #[derive(Args, Debug)]
@@ -112,6 +115,18 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => run_render(&args),
         Command::Info { scene } => run_info(&scene),
         Command::Bench(args) => run_bench(&args),
+        Command::Compare { image, reference } => {
+            let (a, b) = (read_linear(&image)?, read_linear(&reference)?);
+            let error = crate::film::relative_mse(&a, &b).ok_or_else(|| Error::Image {
+                path: image.clone(),
+                message: format!(
+                    "is {}x{}, the reference {}x{}",
+                    a.width, a.height, b.width, b.height
+                ),
+            })?;
+            println!("{error:.6e}");
+            Ok(())
+        }
     }
 }
 

@@ -155,3 +155,44 @@ fn writes_bdpt_strategy_images() {
         .collect();
     assert_eq!(names, expected);
 }
+
+#[test]
+fn compare_reports_relative_mse() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b, small) = (
+        dir.path().join("a.pfm"),
+        dir.path().join("b.exr"),
+        dir.path().join("small.pfm"),
+    );
+    let mut image = tracer::film::Image::new(2, 1);
+    image.pixels = vec![glam::Vec3::splat(1.0), glam::Vec3::splat(0.0)];
+    let mut other = image.clone();
+    other.pixels[0] = glam::Vec3::splat(1.5);
+    let linear = tracer::scene::desc::Tonemap::Clamp;
+    tracer::film::write::write_image(&a, &image, linear, 0.0).unwrap();
+    tracer::film::write::write_image(&b, &other, linear, 0.0).unwrap();
+    tracer::film::write::write_image(&small, &tracer::film::Image::new(1, 1), linear, 0.0).unwrap();
+    let run = |x: &std::path::Path, y: &std::path::Path| {
+        tracer().arg("compare").arg(x).arg(y).output().unwrap()
+    };
+    // Pixel 0: (1.5 − 1)² / (1 + 0.01) in each channel; pixel 1: zero. Mean over 6 values.
+    let out = run(&b, &a);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let error: f64 = String::from_utf8_lossy(&out.stdout).trim().parse().unwrap();
+    assert!((error - 0.25 / 1.01 / 2.0).abs() < 1e-6, "{error}");
+    let out = run(&a, &a);
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout)
+            .trim()
+            .parse::<f64>()
+            .unwrap(),
+        0.0
+    );
+    let out = run(&small, &a);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("small.pfm"));
+}

@@ -171,3 +171,26 @@ pub fn read_pfm(path: &Path) -> Result<Image> {
     }
     Ok(image)
 }
+
+/// Reads a linear image written by `tracer` (or any tool): `.pfm` or `.exr`.
+pub fn read_linear(path: &Path) -> Result<Image> {
+    match ImageFormat::from_path(path) {
+        Some(ImageFormat::Pfm) => read_pfm(path),
+        Some(ImageFormat::Exr) => {
+            let (width, height, pixels) =
+                crate::scene::texture::read_exr(path).map_err(|message| Error::Image {
+                    path: path.to_path_buf(),
+                    message,
+                })?;
+            Ok(Image {
+                width: width as u32,
+                height: height as u32,
+                pixels,
+            })
+        }
+        _ => Err(Error::Image {
+            path: path.to_path_buf(),
+            message: "not a linear image: use .pfm or .exr".into(),
+        }),
+    }
+}

@@ -54,6 +54,13 @@ fn srgb_decode(v: u16) -> f32 {
 }
 
 fn load_exr(path: &Path) -> Result<Texture, String> {
+    let (width, height, texels) = read_exr(path)?;
+    Ok(Texture::new(width, height, texels))
+}
+
+/// The first RGB(A) layer of an EXR file: width, height and linear texels,
+/// top row first.
+pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
     use exr::prelude::*;
     let image = read_first_rgba_layer_from_file(
         path,
@@ -67,11 +74,11 @@ fn load_exr(path: &Path) -> Result<Texture, String> {
             texels[position.y() * *width + position.x()] = Rgb::new(r, g, b);
         },
     )
-    .map_err(|e| format!("cannot decode texture {}: {e}", path.display()))?;
+    .map_err(|e| format!("cannot decode {}: {e}", path.display()))?;
     let (width, texels) = image.layer_data.channel_data.pixels;
     let height = texels.len() / width.max(1);
     if width == 0 || height == 0 {
-        return Err(format!("texture {} is empty", path.display()));
+        return Err(format!("image {} is empty", path.display()));
     }
-    Ok(Texture::new(width, height, texels))
+    Ok((width, height, texels))
 }
