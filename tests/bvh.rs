@@ -340,3 +340,63 @@ fn parallel_build_equals_sequential_build() {
         assert_same(&tris, &both, &random_ray(&mut rng, k));
     }
 }
+
+/// Packets return, ray for ray, what single-ray traversal returns: coherent
+/// packets (neighbouring camera rays), incoherent ones, partial packets, and
+/// rays with their own tmin and tmax.
+#[test]
+fn packets_match_single_rays() {
+    let mut rng = Rng::new(21);
+    let mesh = shapes::sphere(Vec3::ZERO, 2.0, 4);
+    let mut tris: Vec<Triangle> = mesh
+        .indices
+        .chunks(3)
+        .map(|f| {
+            Triangle::new(
+                mesh.positions[f[0] as usize],
+                mesh.positions[f[1] as usize],
+                mesh.positions[f[2] as usize],
+            )
+        })
+        .collect();
+    tris.extend(soup(&mut rng, 2000, 0.5));
+    let bvh = WideBvh::build(&tris);
+    let check = |rays: &[Ray]| {
+        let packet = bvh.intersect_packet(rays);
+        for (k, ray) in rays.iter().enumerate() {
+            let single = bvh.intersect(ray);
+            assert_eq!(
+                packet[k].map(|h| (h.t, h.triangle)),
+                single.map(|h| (h.t, h.triangle)),
+                "ray {k} of a packet of {}: {ray:?}",
+                rays.len()
+            );
+        }
+        for hit in &packet[rays.len()..] {
+            assert!(hit.is_none(), "a lane past the packet reported a hit");
+        }
+    };
+    for p in 0..500 {
+        let origin = rng.vec3(-12.0, 12.0);
+        let target = rng.vec3(-3.0, 3.0);
+        let n = 1 + p % 8;
+        let coherent: Vec<Ray> = (0..n)
+            .map(|k| {
+                let t = target + Vec3::new(0.05 * k as f32, 0.03 * (k % 3) as f32, 0.0);
+                let mut ray = Ray::new(origin, (t - origin).normalize());
+                if p % 5 == 0 {
+                    ray.tmax = rng.range(5.0, 20.0);
+                }
+                if p % 7 == 0 {
+                    ray.tmin = rng.range(0.0, 10.0);
+                }
+                ray
+            })
+            .collect();
+        check(&coherent);
+        let incoherent: Vec<Ray> = (0..n).map(|k| random_ray(&mut rng, p * 8 + k)).collect();
+        check(&incoherent);
+    }
+    let empty = WideBvh::build(&[]);
+    assert!(empty.intersect_packet(&[Ray::new(Vec3::ZERO, Vec3::Z)])[0].is_none());
+}

@@ -4,6 +4,7 @@
 pub mod meshes;
 pub mod rays;
 
+use crate::bvh::wide::PACKET_SIZE;
 use crate::bvh::{BuildOptions, WideBvh};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Ray, Triangle};
@@ -45,7 +46,7 @@ pub struct BuildFigures {
 #[derive(Debug, Serialize)]
 pub struct TraceFigures {
     pub rays: String,
-    /// `closest` or `any`.
+    /// `closest`, `packet` (closest hits, eight rays at a time) or `any`.
     pub query: &'static str,
     pub threads: usize,
     pub count: usize,
@@ -123,6 +124,23 @@ fn trace_closest(bvh: &WideBvh, rays: &[Ray]) -> (usize, f64) {
         .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
+/// Closest hits with packets of consecutive rays (eight neighbouring pixels
+/// of a row, for primary rays).
+fn trace_packets(bvh: &WideBvh, rays: &[Ray]) -> (usize, f64) {
+    rays.par_chunks(CHUNK)
+        .map(|chunk| {
+            let mut result = (0usize, 0f64);
+            for packet in chunk.chunks(PACKET_SIZE) {
+                for hit in bvh.intersect_packet(packet).iter().flatten() {
+                    result.0 += 1;
+                    result.1 += hit.t as f64;
+                }
+            }
+            result
+        })
+        .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+}
+
 fn trace_any(bvh: &WideBvh, rays: &[Ray]) -> usize {
     rays.par_chunks(CHUNK)
         .map(|chunk| chunk.iter().filter(|r| bvh.occluded(r)).count())
@@ -164,32 +182,26 @@ pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
     for (name, rays) in &sets {
         for &threads in &options.threads {
             let pool = pool(threads)?;
-            let (hits, distance_sum) = pool.install(|| trace_closest(&bvh, rays));
-            let seconds = median_seconds(options.runs, || {
-                pool.install(|| trace_closest(&bvh, rays));
-            });
-            traces.push(TraceFigures {
-                rays: name.clone(),
-                query: "closest",
-                threads,
-                count: rays.len(),
-                mrays_per_second: rays.len() as f64 / seconds / 1e6,
-                hits,
-                distance_sum,
-            });
-            let hits = pool.install(|| trace_any(&bvh, rays));
-            let seconds = median_seconds(options.runs, || {
-                pool.install(|| trace_any(&bvh, rays));
-            });
-            traces.push(TraceFigures {
-                rays: name.clone(),
-                query: "any",
-                threads,
-                count: rays.len(),
-                mrays_per_second: rays.len() as f64 / seconds / 1e6,
-                hits,
-                distance_sum: 0.0,
-            });
+            let mut measure = |query: &'static str, trace: &(dyn Fn() -> (usize, f64) + Sync)| {
+                let (hits, distance_sum) = pool.install(trace);
+                let seconds = median_seconds(options.runs, || {
+                    pool.install(trace);
+                });
+                traces.push(TraceFigures {
+                    rays: name.clone(),
+                    query,
+                    threads,
+                    count: rays.len(),
+                    mrays_per_second: rays.len() as f64 / seconds / 1e6,
+                    hits,
+                    distance_sum,
+                });
+            };
+            measure("closest", &|| trace_closest(&bvh, rays));
+            if name == "primary" {
+                measure("packet", &|| trace_packets(&bvh, rays));
+            }
+            measure("any", &|| (trace_any(&bvh, rays), 0.0));
         }
     }
     let report = bvh.report();

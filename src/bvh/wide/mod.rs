@@ -14,7 +14,10 @@
 //! Built by collapsing the binary SAH BVH (see `collapse.rs`).
 
 mod collapse;
+mod packet;
 mod traverse;
+
+pub use packet::PACKET_SIZE;
 
 use super::BuildOptions;
 use crate::geometry::{Aabb, Triangle};

@@ -16,7 +16,7 @@ use wide::f32x4;
 
 /// A leaf reference's block index and triangle count.
 #[inline(always)]
-fn leaf(reference: u32) -> (usize, u32) {
+pub(super) fn leaf(reference: u32) -> (usize, u32) {
     (
         (reference & LEAF_INDEX_MASK) as usize,
         ((reference & !LEAF_BIT) >> LEAF_COUNT_SHIFT) + 1,
@@ -29,14 +29,14 @@ const STACK_SIZE: usize = 3 * 96 + 4;
 
 /// The traversal stack, left uninitialised: zeroing two kilobytes on every
 /// ray cost more than the traversal itself in small scenes.
-struct Stack<T: Copy> {
+pub(super) struct Stack<T: Copy> {
     entries: [MaybeUninit<T>; STACK_SIZE],
     top: usize,
 }
 
 impl<T: Copy> Stack<T> {
     #[inline(always)]
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         Stack {
             entries: [const { MaybeUninit::uninit() }; STACK_SIZE],
             top: 0,
@@ -44,14 +44,14 @@ impl<T: Copy> Stack<T> {
     }
 
     #[inline(always)]
-    fn push(&mut self, entry: T) {
+    pub(super) fn push(&mut self, entry: T) {
         // Bounds-checked: an overflow panics rather than corrupting memory.
         self.entries[self.top].write(entry);
         self.top += 1;
     }
 
     #[inline(always)]
-    fn pop(&mut self) -> Option<T> {
+    pub(super) fn pop(&mut self) -> Option<T> {
         if self.top == 0 {
             return None;
         }
@@ -64,10 +64,10 @@ impl<T: Copy> Stack<T> {
 /// Slab distances are rounded; stretching the exit distance by a few ULPs
 /// keeps a hit that lies exactly on a box face from being culled (Ize,
 /// "Robust BVH Ray Traversal", 2013).
-const EXIT_STRETCH: f32 = 1.0 + 4.0 * f32::EPSILON;
+pub(super) const EXIT_STRETCH: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// The ray, splatted across lanes, with what every test reuses.
-struct RayLanes {
+pub(super) struct RayLanes {
     origin: [f32x4; 3],
     inv_dir: [f32x4; 3],
     /// Per axis, which row of `Node4::bounds` holds the near plane (the
@@ -81,7 +81,7 @@ struct RayLanes {
 }
 
 impl RayLanes {
-    fn new(ray: &Ray) -> RayLanes {
+    pub(super) fn new(ray: &Ray) -> RayLanes {
         let d = ray.dir.to_array();
         let o = ray.origin.to_array();
         // A zero component would give 0 × ∞ = NaN for a ray lying in a slab
@@ -124,7 +124,7 @@ impl RayLanes {
     /// mask of lanes hit within (tmin, tmax), their distances, and the
     /// barycentrics of vertices 1 and 2.
     #[inline(always)]
-    fn intersect(
+    pub(super) fn intersect(
         &self,
         block: &TriangleBlock,
         count: u32,
@@ -293,7 +293,7 @@ impl WideBvh {
     }
 
     /// The root's own box, which no node holds: tested once per ray.
-    fn root_entered(&self, ray: &Ray) -> bool {
+    pub(super) fn root_entered(&self, ray: &Ray) -> bool {
         let inv = ray.dir.recip();
         let t0 = (self.bounds.min - ray.origin) * inv;
         let t1 = (self.bounds.max - ray.origin) * inv;
