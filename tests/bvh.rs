@@ -332,9 +332,27 @@ fn parallel_build_equals_sequential_build() {
     );
     assert_eq!(parallel.nodes().len(), sequential.nodes().len());
     assert!(parallel.nodes() == sequential.nodes());
+    // The wide BVH too: subtrees collapsed in parallel land where the
+    // sequential depth-first collapse puts them.
+    let wide = WideBvh::build(&tris);
+    let wide_sequential = WideBvh::build_with(
+        &tris,
+        &BuildOptions {
+            parallel: false,
+            ..BuildOptions::default()
+        },
+    );
+    assert_eq!(wide.nodes().len(), wide_sequential.nodes().len());
+    for (a, b) in wide.nodes().iter().zip(wide_sequential.nodes()) {
+        assert_eq!((a.children, a.bounds), (b.children, b.bounds));
+    }
+    assert_eq!(wide.blocks().len(), wide_sequential.blocks().len());
+    for (a, b) in wide.blocks().iter().zip(wide_sequential.blocks()) {
+        assert_eq!((a.id, a.v), (b.id, b.v));
+    }
     let both = Both {
         binary: parallel,
-        wide: WideBvh::build(&tris),
+        wide,
     };
     for k in 0..2000 {
         assert_same(&tris, &both, &random_ray(&mut rng, k));

@@ -257,7 +257,7 @@ fn split(
     }
     // More bins than triangles only adds empty planes to sweep.
     let bins = options.bins.min(count.max(4));
-    let best = find_split(prims, range, bins);
+    let best = find_split(prims, range, bins, options.parallel);
     let leaf_cost = count as f32 * INTERSECTION_COST;
     if best.cost >= leaf_cost && !must_split {
         return None;
@@ -285,17 +285,38 @@ fn split(
 
 /// Bins every prim along all three axes in one pass, then sweeps each axis
 /// for the cheapest plane.
-fn find_split(prims: &[Prim], range: Range, bins: usize) -> Split {
+fn find_split(prims: &[Prim], range: Range, bins: usize, parallel: bool) -> Split {
     let binner = Binner::new(range.centroids, bins);
-    let mut binned = [[EMPTY_BIN; MAX_BINS]; 3];
-    for p in prims {
-        let b = binner.bins_of(p.centroid2());
-        for axis in 0..3 {
-            let bin = &mut binned[axis][b[axis]];
-            bin.bounds.grow(p);
-            bin.count += 1;
+    let bin_all = |prims: &[Prim]| {
+        let mut binned = [[EMPTY_BIN; MAX_BINS]; 3];
+        for p in prims {
+            let b = binner.bins_of(p.centroid2());
+            for axis in 0..3 {
+                let bin = &mut binned[axis][b[axis]];
+                bin.bounds.grow(p);
+                bin.count += 1;
+            }
         }
-    }
+        binned
+    };
+    // The top levels' binning would otherwise run on one thread while the
+    // others wait: bin chunks in parallel and add the bins up.
+    let binned = if parallel && prims.len() >= 4 * PARALLEL_MIN {
+        prims.par_chunks(PARALLEL_MIN).map(bin_all).reduce(
+            || [[EMPTY_BIN; MAX_BINS]; 3],
+            |mut a, b| {
+                for axis in 0..3 {
+                    for k in 0..bins {
+                        a[axis][k].bounds = a[axis][k].bounds.union(b[axis][k].bounds);
+                        a[axis][k].count += b[axis][k].count;
+                    }
+                }
+                a
+            },
+        )
+    } else {
+        bin_all(prims)
+    };
     let parent_area = {
         let e = range.bounds.extent();
         (e.x * e.y + e.y * e.z + e.z * e.x).max(f32::MIN_POSITIVE)
