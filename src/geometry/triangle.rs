@@ -59,10 +59,11 @@ pub struct RayShear {
 
 impl RayShear {
     pub fn new(origin: Vec3, dir: Vec3) -> RayShear {
-        let a = dir.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
+        let d = dir.to_array();
+        let a = d.map(f32::abs);
+        let kz = if a[0] >= a[1] && a[0] >= a[2] {
             0
-        } else if a.y >= a.z {
+        } else if a[1] >= a[2] {
             1
         } else {
             2
@@ -70,17 +71,20 @@ impl RayShear {
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         // Keep the winding of the projected triangle: swap when looking down −z.
-        if dir[kz] < 0.0 {
+        if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
+        // One division: the shear's own rounding does not affect
+        // watertightness, which only needs every edge evaluated consistently.
+        let sz = 1.0 / d[kz];
         RayShear {
             origin,
             kx,
             ky,
             kz,
-            sx: dir[kx] / dir[kz],
-            sy: dir[ky] / dir[kz],
-            sz: 1.0 / dir[kz],
+            sx: d[kx] * sz,
+            sy: d[ky] * sz,
+            sz,
         }
     }
 

@@ -95,7 +95,7 @@ impl WideBvh {
         let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
         let mut active = 0u32;
         for (k, r) in rays.iter().enumerate() {
-            if self.root_entered(r) {
+            if singles[k].enters(&self.bounds, r.tmax) {
                 tmax[k] = r.tmax;
                 active |= 1 << k;
             }

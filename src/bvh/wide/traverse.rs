@@ -10,7 +10,7 @@ use super::{
 };
 use crate::bvh::Hit;
 use crate::geometry::triangle::RayShear;
-use crate::geometry::Ray;
+use crate::geometry::{Aabb, Ray};
 use std::mem::MaybeUninit;
 use wide::f32x4;
 
@@ -78,6 +78,9 @@ pub(super) struct RayLanes {
     /// and the shear constants (see `RayShear`).
     k: [usize; 3],
     shear: [f32x4; 3],
+    scalar_origin: [f32; 3],
+    scalar_inv: [f32; 3],
+    scalar_tmin: f32,
 }
 
 impl RayLanes {
@@ -101,7 +104,24 @@ impl RayLanes {
             tmin: f32x4::splat(ray.tmin),
             k,
             shear: s.map(f32x4::splat),
+            scalar_origin: o,
+            scalar_inv: inv,
+            scalar_tmin: ray.tmin,
         }
+    }
+
+    /// Whether the ray meets `bounds` within (tmin, `tmax`): the root's own
+    /// box, which no node holds, tested once per ray.
+    pub(super) fn enters(&self, bounds: &Aabb, tmax: f32) -> bool {
+        let (lo, hi) = (bounds.min.to_array(), bounds.max.to_array());
+        let (mut near, mut far) = (self.scalar_tmin, tmax);
+        for a in 0..3 {
+            let t0 = (lo[a] - self.scalar_origin[a]) * self.scalar_inv[a];
+            let t1 = (hi[a] - self.scalar_origin[a]) * self.scalar_inv[a];
+            near = near.max(t0.min(t1));
+            far = far.min(t0.max(t1));
+        }
+        near <= far * EXIT_STRETCH
     }
 
     /// Entry distances into the four child boxes, and a bit mask of those
@@ -197,13 +217,13 @@ impl WideBvh {
             return None;
         }
         let lanes = RayLanes::new(ray);
+        if !lanes.enters(&self.bounds, ray.tmax) {
+            return None;
+        }
         let mut tmax = ray.tmax;
         let mut closest: Option<(u32, usize, f32, f32)> = None;
         let mut stack = Stack::<(u32, f32)>::new();
         let mut current = self.root;
-        if !self.root_entered(ray) {
-            return None;
-        }
         loop {
             if current & LEAF_BIT == 0 {
                 let node = &self.nodes[current as usize];
@@ -264,10 +284,13 @@ impl WideBvh {
     /// Whether anything lies on the ray within (tmin, tmax): for shadow
     /// rays, so it stops at the first hit it finds, in whatever order.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        if self.root == EMPTY_CHILD || !self.root_entered(ray) {
+        if self.root == EMPTY_CHILD {
             return false;
         }
         let lanes = RayLanes::new(ray);
+        if !lanes.enters(&self.bounds, ray.tmax) {
+            return false;
+        }
         let mut stack = Stack::<u32>::new();
         let mut current = self.root;
         loop {
@@ -290,16 +313,5 @@ impl WideBvh {
                 None => return false,
             }
         }
-    }
-
-    /// The root's own box, which no node holds: tested once per ray.
-    pub(super) fn root_entered(&self, ray: &Ray) -> bool {
-        let inv = ray.dir.recip();
-        let t0 = (self.bounds.min - ray.origin) * inv;
-        let t1 = (self.bounds.max - ray.origin) * inv;
-        // `min`/`max` ignore a NaN (0 × ∞ in a slab's plane): conservative.
-        let near = t0.min(t1).max_element().max(ray.tmin);
-        let far = t0.max(t1).min_element().min(ray.tmax);
-        near <= far * EXIT_STRETCH
     }
 }
