@@ -27,6 +27,16 @@ fn brute_force(tris: &[Triangle], ray: &Ray) -> Option<Hit> {
     best
 }
 
+fn mesh_triangles(mesh: &shapes::MeshData) -> Vec<Triangle> {
+    mesh.indices
+        .chunks(3)
+        .map(|f| {
+            let p = |i: usize| mesh.positions[f[i] as usize];
+            Triangle::new(p(0), p(1), p(2))
+        })
+        .collect()
+}
+
 fn soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Triangle> {
     (0..n)
         .map(|k| {
@@ -219,17 +229,7 @@ fn coplanar_grid_and_extreme_coordinates() {
 #[test]
 fn closed_mesh_is_watertight_from_inside() {
     let mesh = shapes::sphere(Vec3::new(0.3, -0.2, 0.1), 2.0, 3);
-    let tris: Vec<Triangle> = mesh
-        .indices
-        .chunks(3)
-        .map(|f| {
-            Triangle::new(
-                mesh.positions[f[0] as usize],
-                mesh.positions[f[1] as usize],
-                mesh.positions[f[2] as usize],
-            )
-        })
-        .collect();
+    let tris = mesh_triangles(&mesh);
     let bvh = Both::build(&tris);
     let mut rng = Rng::new(5);
     let center = Vec3::new(0.3, -0.2, 0.1);
@@ -366,17 +366,7 @@ fn parallel_build_equals_sequential_build() {
 fn packets_match_single_rays() {
     let mut rng = Rng::new(21);
     let mesh = shapes::sphere(Vec3::ZERO, 2.0, 4);
-    let mut tris: Vec<Triangle> = mesh
-        .indices
-        .chunks(3)
-        .map(|f| {
-            Triangle::new(
-                mesh.positions[f[0] as usize],
-                mesh.positions[f[1] as usize],
-                mesh.positions[f[2] as usize],
-            )
-        })
-        .collect();
+    let mut tris = mesh_triangles(&mesh);
     tris.extend(soup(&mut rng, 2000, 0.5));
     let bvh = WideBvh::build(&tris);
     let check = |rays: &[Ray]| {
