@@ -91,13 +91,12 @@ fn bench_mesh(c: &mut Criterion, name: &str, tris: &[Triangle]) {
     );
 
     let bounds = bvh.bounds();
-    let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element();
     let primary = rays::primary(&rays::framing_camera(bounds));
     let hits = rays::hit_points(&bvh, tris, &primary);
     let sets = [
         ("primary", primary.clone()),
         ("incoherent", rays::incoherent(bounds, 1 << 19)),
-        ("shadow", rays::shadow(&hits, bounds, magnitude)),
+        ("shadow", rays::shadow(&hits, bounds)),
     ];
     for (kind, set) in &sets {
         let orays: Vec<obvhs::ray::Ray> = set.iter().map(obvhs_ray).collect();

@@ -225,10 +225,7 @@ fn run_render(args: &RenderArgs) -> Result<()> {
 /// Renders BDPT once more, keeping each strategy apart, and writes
 /// `s{S}_t{T}_unweighted.exr` and `s{S}_t{T}_weighted.exr` into `dir`.
 fn write_strategies(scene: &Scene, options: &RenderOptions, dir: &std::path::Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let images = render_strategies(scene, options)?;
     for i in &images {
         for (kind, image) in [("unweighted", &i.unweighted), ("weighted", &i.weighted)] {

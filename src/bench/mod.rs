@@ -8,6 +8,7 @@ use crate::bvh::wide::PACKET_SIZE;
 use crate::bvh::{BuildOptions, WideBvh};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Ray, Triangle};
+use crate::render::worker_pool;
 use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -88,13 +89,6 @@ fn load(path: &Path) -> Result<(Vec<Triangle>, Option<Camera>)> {
     }
 }
 
-fn pool(threads: usize) -> Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::Unsupported(format!("cannot start worker threads: {e}")))
-}
-
 /// The median of `runs` timings of `f`, in seconds.
 fn median_seconds(runs: usize, mut f: impl FnMut()) -> f64 {
     let mut times: Vec<f64> = (0..runs.max(1))
@@ -152,7 +146,7 @@ pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
     let mut builds = Vec::new();
     let mut bvh = None;
     for &threads in &options.threads {
-        let pool = pool(threads)?;
+        let pool = worker_pool(Some(threads))?;
         let build_options = BuildOptions {
             parallel: threads > 1,
             ..BuildOptions::default()
@@ -169,10 +163,7 @@ pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
     let bounds = bvh.bounds();
     let sets = ray_sets(&bvh, &triangles, camera, bounds, options)?;
     if let Some(dir) = &options.save_rays {
-        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-            path: dir.clone(),
-            source,
-        })?;
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         for (name, rays) in &sets {
             rays::write_file(&dir.join(format!("{name}.rays")), rays)?;
         }
@@ -181,7 +172,7 @@ pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
     let mut traces = Vec::new();
     for (name, rays) in &sets {
         for &threads in &options.threads {
-            let pool = pool(threads)?;
+            let pool = worker_pool(Some(threads))?;
             let mut measure = |query: &'static str, trace: &(dyn Fn() -> (usize, f64) + Sync)| {
                 let (hits, distance_sum) = pool.install(trace);
                 let seconds = median_seconds(options.runs, || {
@@ -236,13 +227,12 @@ fn ray_sets(
     let camera = camera.unwrap_or_else(|| rays::framing_camera(bounds));
     let primary = rays::primary(&camera);
     let hits = rays::hit_points(bvh, triangles, &primary);
-    let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element();
     let mut sets = Vec::new();
     if wants(RayKind::Primary) {
         sets.push(("primary".to_string(), primary));
     }
     if wants(RayKind::Diffuse) {
-        sets.push(("diffuse".to_string(), rays::diffuse(&hits, magnitude)));
+        sets.push(("diffuse".to_string(), rays::diffuse(&hits)));
     }
     if wants(RayKind::Incoherent) {
         sets.push((
@@ -251,7 +241,7 @@ fn ray_sets(
         ));
     }
     if wants(RayKind::Shadow) {
-        sets.push(("shadow".to_string(), rays::shadow(&hits, bounds, magnitude)));
+        sets.push(("shadow".to_string(), rays::shadow(&hits, bounds)));
     }
     Ok(sets)
 }

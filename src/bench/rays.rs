@@ -4,6 +4,7 @@
 
 use crate::bvh::WideBvh;
 use crate::camera::Camera;
+use crate::geometry::ray::{magnitude, offset_origin};
 use crate::geometry::{Aabb, Ray, Triangle};
 use crate::sampling::sampler::hash;
 use crate::sampling::warp;
@@ -59,28 +60,40 @@ pub fn primary(camera: &Camera) -> Vec<Ray> {
     rays
 }
 
-/// Where each primary ray hits: the point and the geometric normal facing the ray.
-pub fn hit_points(bvh: &WideBvh, triangles: &[Triangle], primary: &[Ray]) -> Vec<(Vec3, Vec3)> {
+/// Where a primary ray hit, as an origin for the next ray: the point moved
+/// off its surface (as the renderer moves it), and the geometric normal
+/// facing the primary ray.
+#[derive(Clone, Copy, Debug)]
+pub struct HitPoint {
+    pub origin: Vec3,
+    pub normal: Vec3,
+}
+
+pub fn hit_points(bvh: &WideBvh, triangles: &[Triangle], primary: &[Ray]) -> Vec<HitPoint> {
     primary
         .iter()
         .filter_map(|ray| {
             let hit = bvh.intersect(ray)?;
-            let n = triangles[hit.triangle as usize].normal();
+            let triangle = &triangles[hit.triangle as usize];
+            let n = triangle.normal();
             let n = if n.dot(ray.dir) > 0.0 { -n } else { n };
-            Some((ray.at(hit.t), n))
+            Some(HitPoint {
+                origin: offset_origin(ray.at(hit.t), n, n, magnitude(&triangle.v)),
+                normal: n,
+            })
         })
         .collect()
 }
 
 /// From each primary hit, a cosine-distributed direction about its normal.
-pub fn diffuse(hits: &[(Vec3, Vec3)], magnitude: f32) -> Vec<Ray> {
+pub fn diffuse(hits: &[HitPoint]) -> Vec<Ray> {
     let mut u = Uniform(1);
     hits.iter()
-        .map(|&(p, n)| {
+        .map(|h| {
             let local = warp::cosine_hemisphere(u.next(), u.next());
-            let (t, b) = n.any_orthonormal_pair();
-            let dir = (local.x * t + local.y * b + local.z * n).normalize();
-            Ray::new(offset(p, n, magnitude), dir)
+            let (t, b) = h.normal.any_orthonormal_pair();
+            let dir = (local.x * t + local.y * b + local.z * h.normal).normalize();
+            Ray::new(h.origin, dir)
         })
         .collect()
 }
@@ -97,30 +110,22 @@ pub fn incoherent(bounds: Aabb, count: usize) -> Vec<Ray> {
 }
 
 /// From each primary hit towards a random point in the bounds, stopping there.
-pub fn shadow(hits: &[(Vec3, Vec3)], bounds: Aabb, magnitude: f32) -> Vec<Ray> {
+pub fn shadow(hits: &[HitPoint], bounds: Aabb) -> Vec<Ray> {
     let mut u = Uniform(3);
     hits.iter()
-        .filter_map(|&(p, n)| {
+        .filter_map(|h| {
             let target = bounds.min + bounds.extent() * Vec3::new(u.next(), u.next(), u.next());
-            let from = offset(p, n, magnitude);
-            let d = target - from;
+            let d = target - h.origin;
             let distance = d.length();
-            (distance > 0.0).then(|| Ray::segment(from, d / distance, distance))
+            (distance > 0.0).then(|| Ray::segment(h.origin, d / distance, distance))
         })
         .collect()
-}
-
-fn offset(p: Vec3, n: Vec3, magnitude: f32) -> Vec3 {
-    p + n * (magnitude * (1.0 / 65536.0))
 }
 
 /// Reads rays from 32-byte little-endian records: origin x, y, z, tmin,
 /// direction x, y, z, tmax.
 pub fn read_file(path: &Path) -> Result<Vec<Ray>> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     if bytes.len() % RECORD_BYTES != 0 {
         return Err(Error::Unsupported(format!(
             "{}: {} bytes is not a whole number of {RECORD_BYTES}-byte ray records",

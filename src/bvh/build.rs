@@ -250,25 +250,21 @@ fn split(
     if count <= options.max_leaf_size {
         return None;
     }
-    let must_split = true;
+    // Anything larger is split, by the SAH's best plane where there is one.
     if depth >= MAX_SAH_DEPTH || range.centroids.extent().max_element() <= 0.0 {
         // Too deep, or all centroids coincide and no plane separates them.
-        return must_split.then(|| median_split(prims, range));
+        return Some(median_split(prims, range));
     }
     // More bins than triangles only adds empty planes to sweep.
     let bins = options.bins.min(count.max(4));
     let best = find_split(prims, range, bins, options.parallel);
-    let leaf_cost = count as f32 * INTERSECTION_COST;
-    if best.cost >= leaf_cost && !must_split {
-        return None;
-    }
     let binner = Binner::new(range.centroids, bins);
     let (axis, bin) = (best.axis, best.bin);
     let goes_left = |p: &Prim| binner.bin_of(p.centroid2(), axis) < bin;
     let (mid, left_centroids, right_centroids) = partition(prims, goes_left);
     if mid == 0 || mid == count {
         // Cannot happen with a proper centroid extent, but never loop forever.
-        return must_split.then(|| median_split(prims, range));
+        return Some(median_split(prims, range));
     }
     Some((
         mid,

@@ -68,12 +68,17 @@ fn pass_size(k: u32) -> u32 {
     1u32 << k.saturating_sub(1).min(6)
 }
 
+/// A rayon pool of `threads` workers (`None`: one per core).
+pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| Error::Unsupported(format!("cannot start worker threads: {e}")))
+}
+
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Image, RenderStats)> {
     let settings = &scene.settings;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| Error::Unsupported(format!("cannot start worker threads: {e}")))?;
+    let pool = worker_pool(options.threads)?;
     let (width, height) = (settings.width, settings.height);
     let mut tiles = tiles::split(width, height);
     let pixels = width as u64 * height as u64;

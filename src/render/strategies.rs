@@ -4,12 +4,12 @@
 //! weighted images of one path length sum to BDPT's image of that length.
 //! Shows a user which strategy carries which effect, and why MIS matters.
 
-use super::{pass_size, render_tile, tiles, Progress, RenderOptions, SPLAT_BATCH};
+use super::{pass_size, render_tile, tiles, worker_pool, Progress, RenderOptions, SPLAT_BATCH};
 use crate::film::Image;
 use crate::integrator::subpath::SplatSink;
 use crate::scene::desc::IntegratorKind;
 use crate::scene::Scene;
-use crate::{Error, Result};
+use crate::Result;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -39,10 +39,7 @@ pub fn render_strategies(scene: &Scene, options: &RenderOptions) -> Result<Vec<S
     settings.integrator = IntegratorKind::Bdpt;
     settings.max_depth = settings.max_depth.min(MAX_STRATEGY_LENGTH);
     let settings = &settings;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| Error::Unsupported(format!("cannot start worker threads: {e}")))?;
+    let pool = worker_pool(options.threads)?;
     let (width, height) = (settings.width, settings.height);
     let pixels = width as usize * height as usize;
     let mut tiles = tiles::split(width, height);

@@ -6,7 +6,7 @@
 //! the single-ray triangle test, so every ray gets exactly the hit it would
 //! get alone. `tracer bench` measures this against single-ray traversal.
 
-use super::traverse::{leaf, RayLanes, Stack, EXIT_STRETCH};
+use super::traverse::{leaf, safe_inverse, RayLanes, Stack, EXIT_STRETCH};
 use super::{WideBvh, EMPTY_CHILD, LEAF_BIT};
 use crate::bvh::Hit;
 use crate::geometry::Ray;
@@ -31,13 +31,6 @@ impl PacketLanes {
             }
             f32x8::new(v)
         };
-        let inv = |c: f32| {
-            1.0 / if c.abs() < 1e-20 {
-                1e-20f32.copysign(c)
-            } else {
-                c
-            }
-        };
         PacketLanes {
             origin: [
                 lane(&|r| r.origin.x),
@@ -45,9 +38,9 @@ impl PacketLanes {
                 lane(&|r| r.origin.z),
             ],
             inv_dir: [
-                lane(&|r| inv(r.dir.x)),
-                lane(&|r| inv(r.dir.y)),
-                lane(&|r| inv(r.dir.z)),
+                lane(&|r| safe_inverse(r.dir.x)),
+                lane(&|r| safe_inverse(r.dir.y)),
+                lane(&|r| safe_inverse(r.dir.z)),
             ],
             tmin: lane(&|r| r.tmin),
         }
@@ -91,7 +84,9 @@ impl WideBvh {
             return hits;
         }
         let lanes = PacketLanes::new(rays);
-        let singles: Vec<RayLanes> = rays.iter().map(RayLanes::new).collect();
+        // Lanes past the packet repeat its last ray; they are never active.
+        let singles: [RayLanes; PACKET_SIZE] =
+            std::array::from_fn(|k| RayLanes::new(&rays[k.min(rays.len() - 1)]));
         let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
         let mut active = 0u32;
         for (k, r) in rays.iter().enumerate() {

@@ -66,6 +66,18 @@ impl<T: Copy> Stack<T> {
 /// "Robust BVH Ray Traversal", 2013).
 pub(super) const EXIT_STRETCH: f32 = 1.0 + 4.0 * f32::EPSILON;
 
+/// 1/c for a slab test. A zero component would give 0 × ∞ = NaN for a ray
+/// lying in a slab plane; a tiny stand-in keeps every distance a number of
+/// the right sign.
+#[inline(always)]
+pub(super) fn safe_inverse(c: f32) -> f32 {
+    1.0 / if c.abs() < 1e-20 {
+        1e-20f32.copysign(c)
+    } else {
+        c
+    }
+}
+
 /// The ray, splatted across lanes, with what every test reuses.
 pub(super) struct RayLanes {
     origin: [f32x4; 3],
@@ -87,15 +99,7 @@ impl RayLanes {
     pub(super) fn new(ray: &Ray) -> RayLanes {
         let d = ray.dir.to_array();
         let o = ray.origin.to_array();
-        // A zero component would give 0 × ∞ = NaN for a ray lying in a slab
-        // plane; a tiny stand-in keeps every distance a number of the right sign.
-        let inv = d.map(|c| {
-            1.0 / if c.abs() < 1e-20 {
-                1e-20f32.copysign(c)
-            } else {
-                c
-            }
-        });
+        let inv = d.map(safe_inverse);
         let (k, s) = RayShear::new(ray.origin, ray.dir).parts();
         RayLanes {
             origin: o.map(f32x4::splat),
