@@ -19,8 +19,9 @@ pub struct BuildOptions {
     /// Bins per axis (2 to 16). 16 is within a few per cent of a full sweep's
     /// SAH cost. Small nodes use fewer: one per triangle at most.
     pub bins: usize,
-    /// A node with more triangles than this is always split. Four matches the
-    /// wide BVH's leaves, which test four triangles at once.
+    /// Ranges of at most this many triangles become leaves, larger ones are
+    /// always split. Four matches the wide BVH's leaves, which test four
+    /// triangles at once.
     pub max_leaf_size: usize,
     /// Build independent subtrees on the rayon pool the call runs in.
     pub parallel: bool,
