@@ -4,6 +4,7 @@ use crate::bench::{BenchOptions, RayKind};
 use crate::film::write::{read_linear, write_image, ImageFormat};
 use crate::light::Light;
 use crate::render::{render, render_strategies, RenderOptions, MAX_STRATEGY_LENGTH};
+use crate::scene::cache::{Cache, CacheUse};
 use crate::scene::desc::{Display, IntegratorKind, Tonemap};
 use crate::scene::{self, Scene};
 use crate::{Error, Result};
@@ -30,12 +31,61 @@ pub enum Command {
     Info {
         /// The scene file.
         scene: PathBuf,
+        #[command(flatten)]
+        cache: CacheArgs,
+    },
+    /// The scene cache: list, clear or prune its entries.
+    Cache {
+        #[command(subcommand)]
+        action: CacheCommand,
+        /// The cache folder (default: $TRACER_CACHE_DIR, else the platform's
+        /// cache folder, ~/.cache/tracer on Linux).
+        #[arg(long, value_name = "DIR", global = true)]
+        cache_dir: Option<PathBuf>,
     },
     /// Measure BVH build time and ray throughput on a mesh (.obj) or a scene.
     Bench(BenchArgs),
     /// Relative MSE of a linear image (.pfm, .exr) against a reference:
     /// the mean over pixels and channels of (image − reference)² / (reference² + 0.01).
     Compare { image: PathBuf, reference: PathBuf },
+}
+
+#[derive(Subcommand, Debug)]
+pub enum CacheCommand {
+    /// One line per entry: key, scene, size, time since last use.
+    List,
+    /// Remove every entry.
+    Clear,
+    /// Remove least recently used entries until the rest fit in a size.
+    Prune {
+        /// e.g. 2G, 500M (binary multiples).
+        #[arg(long, value_parser = scene::cache::parse_size)]
+        max_size: u64,
+    },
+}
+
+/// Where prepared geometry is cached between runs.
+#[derive(Args, Debug, Default, Clone)]
+pub struct CacheArgs {
+    /// The scene cache folder (default: $TRACER_CACHE_DIR, else the
+    /// platform's cache folder, ~/.cache/tracer on Linux).
+    #[arg(long, value_name = "DIR")]
+    pub cache_dir: Option<PathBuf>,
+    /// Neither read nor write the scene cache.
+    #[arg(long, conflicts_with = "cache_dir")]
+    pub no_cache: bool,
+}
+
+impl CacheArgs {
+    pub fn cache(&self) -> Option<Cache> {
+        if self.no_cache {
+            return None;
+        }
+        self.cache_dir
+            .clone()
+            .or_else(Cache::default_dir)
+            .map(Cache::new)
+    }
 }
 
 #[derive(Args, Debug)]
@@ -99,6 +149,8 @@ pub struct RenderArgs {
     /// vertices), unweighted and MIS-weighted, for paths of up to 5 segments.
     #[arg(long, value_name = "DIR")]
     pub bdpt_strategies: Option<PathBuf>,
+    #[command(flatten)]
+    pub cache: CacheArgs,
 }
 
 fn positive_seconds(s: &str) -> std::result::Result<f32, String> {
@@ -113,7 +165,8 @@ fn positive_seconds(s: &str) -> std::result::Result<f32, String> {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => run_render(&args),
-        Command::Info { scene } => run_info(&scene),
+        Command::Info { scene, cache } => run_info(&scene, &cache),
+        Command::Cache { action, cache_dir } => run_cache(&action, cache_dir),
         Command::Bench(args) => run_bench(&args),
         Command::Compare { image, reference } => {
             let (a, b) = (read_linear(&image)?, read_linear(&reference)?);
@@ -132,7 +185,7 @@ pub fn run(cli: Cli) -> Result<()> {
 
 /// Loads the scene and applies the command-line overrides.
 pub fn prepare(args: &RenderArgs) -> Result<Scene> {
-    let mut scene = scene::load(&args.scene)?;
+    let mut scene = scene::load_cached(&args.scene, args.cache.cache().as_ref())?;
     let s = &mut scene.settings;
     if let Some(o) = &args.output {
         s.output = o.clone();
@@ -186,13 +239,22 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             scene.settings.output.display()
         );
     }
+    let bvh = match scene.report.cache {
+        CacheUse::Hit => "geometry and BVH from the scene cache".to_string(),
+        CacheUse::Stored => format!(
+            "BVH built in {:.3} s and cached",
+            scene.report.bvh_build_seconds
+        ),
+        CacheUse::Off | CacheUse::NotStored => {
+            format!("BVH built in {:.3} s", scene.report.bvh_build_seconds)
+        }
+    };
     eprintln!(
-        "loaded {} ({} triangles, {} lights) in {:.2} s, BVH built in {:.3} s",
+        "loaded {} ({} triangles, {} lights) in {:.2} s, {bvh}",
         args.scene.display(),
         scene.triangles.len(),
         scene.lights.len(),
         start.elapsed().as_secs_f64(),
-        scene.report.bvh_build_seconds
     );
     let options = RenderOptions {
         threads: args.threads.map(|t| t as usize),
@@ -269,8 +331,79 @@ fn run_bench(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-fn run_info(path: &std::path::Path) -> Result<()> {
-    let scene = scene::load(path)?;
+fn run_cache(action: &CacheCommand, dir: Option<PathBuf>) -> Result<()> {
+    let dir = dir.or_else(Cache::default_dir).ok_or_else(|| {
+        Error::Unsupported("no cache folder: pass --cache-dir or set TRACER_CACHE_DIR".into())
+    })?;
+    let cache = Cache::new(&dir);
+    let io = |e| Error::io(&dir, e);
+    match action {
+        CacheCommand::List => {
+            let entries = cache.list().map_err(io)?;
+            println!("{:<16}  {:>10}  {:>10}  scene", "key", "size", "last used");
+            for e in &entries {
+                let age = e.last_used.elapsed().unwrap_or_default();
+                let scene = match &e.scene {
+                    Ok(s) => s.clone(),
+                    Err(why) => format!("(invalid: {why})"),
+                };
+                println!(
+                    "{:<16}  {:>10}  {:>10}  {scene}",
+                    &e.key[..e.key.len().min(16)],
+                    human_bytes(e.bytes),
+                    human_age(age)
+                );
+            }
+            let total: u64 = entries.iter().map(|e| e.bytes).sum();
+            println!(
+                "{} entries, {} in {}",
+                entries.len(),
+                human_bytes(total),
+                dir.display()
+            );
+        }
+        CacheCommand::Clear => {
+            let (n, bytes) = cache.clear().map_err(io)?;
+            println!("removed {n} files ({})", human_bytes(bytes));
+        }
+        CacheCommand::Prune { max_size } => {
+            let (n, bytes) = cache.prune(*max_size).map_err(io)?;
+            println!(
+                "removed {n} entries ({}), least recently used first",
+                human_bytes(bytes)
+            );
+        }
+    }
+    Ok(())
+}
+
+fn human_bytes(n: u64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut x = n as f64;
+    let mut unit = 0;
+    while x >= 1024.0 && unit < UNITS.len() - 1 {
+        x /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{n} B")
+    } else {
+        format!("{x:.1} {}", UNITS[unit])
+    }
+}
+
+fn human_age(d: std::time::Duration) -> String {
+    let s = d.as_secs();
+    match s {
+        0..60 => format!("{s} s ago"),
+        60..3600 => format!("{} min ago", s / 60),
+        3600..86400 => format!("{} h ago", s / 3600),
+        _ => format!("{} d ago", s / 86400),
+    }
+}
+
+fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
+    let scene = scene::load_cached(path, cache.cache().as_ref())?;
     let count = |f: fn(&Light) -> bool| scene.lights.iter().filter(|l| f(l)).count();
     println!("scene:      {} ({})", scene.name, path.display());
     println!("triangles:  {}", scene.triangles.len());

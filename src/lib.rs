@@ -17,6 +17,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod pod_array;
 pub mod render;
 pub mod sampling;
 pub mod scene;

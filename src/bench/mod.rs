@@ -85,7 +85,7 @@ fn load(path: &Path) -> Result<(Vec<Triangle>, Option<Camera>)> {
     } else {
         let mut scene = crate::scene::load(path)?;
         scene.set_resolution(rays::PRIMARY_RESOLUTION, rays::PRIMARY_RESOLUTION);
-        Ok((scene.triangles, Some(scene.camera)))
+        Ok((scene.triangles.into_vec(), Some(scene.camera)))
     }
 }
 

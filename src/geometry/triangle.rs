@@ -8,7 +8,8 @@
 
 use glam::{DVec3, Vec3};
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub struct Triangle {
     pub v: [Vec3; 3],
 }

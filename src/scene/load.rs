@@ -1,19 +1,21 @@
 //! Turns a [`SceneDesc`] into a renderable [`Scene`]: materials with their
 //! textures, objects as world-space triangles, lights, and the BVH.
 
+use super::cache::{self, Cache, CacheUse};
 use super::desc::*;
 use super::obj::{load_obj, MtlMaterial};
 use super::texture::load_texture;
 use super::{format, trs, LoadReport, Scene, Settings, TriangleShading, NO_LIGHT};
-use crate::bvh::WideBvh;
+use crate::bvh::{BuildOptions, WideBvh};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::shapes::{self, MeshData};
 use crate::geometry::{Aabb, Triangle};
 use crate::light::{AreaLight, DirectionalLight, Light, LightSelector, PointLight, SpotLight};
 use crate::material::{Albedo, Material, Texture};
+use crate::pod_array::PodArray;
 use crate::{Error, Result};
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -37,6 +39,52 @@ pub fn load(path: &Path) -> Result<Scene> {
     load_desc(parse_file(path)?)
 }
 
+/// Reads and prepares the scene in `path`, taking its geometry and BVH from
+/// `cache` when an entry for exactly this geometry is there, and storing
+/// one when not.
+pub fn load_cached(path: &Path, cache: Option<&Cache>) -> Result<Scene> {
+    load_desc_cached(parse_file(path)?, cache)
+}
+
+/// What a scene's objects become: triangles, their shading data, emitters,
+/// the materials their MTL files add, and the BVH. This is the part of
+/// loading that the scene cache keeps.
+pub struct Geometry {
+    pub triangles: PodArray<Triangle>,
+    /// With each emitter's light index set: area lights are the first
+    /// lights, in emitter order.
+    pub shading: PodArray<TriangleShading>,
+    pub emitters: Vec<Emitter>,
+    /// Materials from the meshes' MTL files, in the order they were added
+    /// (after the scene's own materials).
+    pub mtl_materials: Vec<MtlRecord>,
+    /// What parsing the meshes warned about.
+    pub mesh_warnings: Vec<String>,
+    pub degenerate_triangles_dropped: usize,
+    pub bvh: WideBvh,
+}
+
+/// An emissive triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emitter {
+    pub triangle: u32,
+    pub radiance: Rgb,
+    pub two_sided: bool,
+}
+
+/// A material an MTL file added: enough to build it again (its texture is
+/// loaded again, not cached).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MtlRecord {
+    /// `mesh.obj:material`.
+    pub name: String,
+    /// Where it came from, for warnings: `objects[2] (material wood)`.
+    pub context: String,
+    pub desc: MaterialDesc,
+    /// `Kd`: the albedo when the texture cannot be read.
+    pub kd: Rgb,
+}
+
 pub(super) fn make_camera(c: &CameraDesc, width: u32, height: u32) -> Option<Camera> {
     Camera::new(c.position.0, c.look_at.0, c.up.0, c.fov.0, width, height)
 }
@@ -49,13 +97,19 @@ struct Builder<'a> {
     textures: HashMap<PathBuf, Arc<Texture>>,
     triangles: Vec<Triangle>,
     shading: Vec<TriangleShading>,
-    /// Emission and two-sidedness of each emissive triangle, by triangle index.
-    emitters: Vec<(u32, Rgb, bool)>,
+    emitters: Vec<Emitter>,
+    mtl_records: Vec<MtlRecord>,
+    mesh_warnings: Vec<String>,
     report: LoadReport,
 }
 
 /// Prepares a described scene for rendering.
 pub fn load_desc(desc: SceneDesc) -> Result<Scene> {
+    load_desc_cached(desc, None)
+}
+
+/// Prepares a described scene for rendering, through `cache` when given.
+pub fn load_desc_cached(desc: SceneDesc, cache: Option<&Cache>) -> Result<Scene> {
     let file = desc.file.as_path();
     let err = |path: &str, msg: String| Error::scene(file, path, msg);
 
@@ -79,6 +133,8 @@ pub fn load_desc(desc: SceneDesc) -> Result<Scene> {
         triangles: Vec::new(),
         shading: Vec::new(),
         emitters: Vec::new(),
+        mtl_records: Vec::new(),
+        mesh_warnings: Vec::new(),
         report: LoadReport::default(),
     };
     for (name, m) in &desc.materials {
@@ -94,22 +150,63 @@ pub fn load_desc(desc: SceneDesc) -> Result<Scene> {
             },
         ),
     };
-    for object in &desc.objects {
-        b.object(object, default_material)?;
-    }
+    let build_options = BuildOptions::default();
+    let key = cache.and_then(|_| cache::scene_key(&desc, &build_options));
+    let scene_materials = b.materials.len();
+    let cached = match (cache, &key) {
+        (Some(c), Some(k)) => c.lookup(k, scene_materials, &mut b.report.warnings),
+        _ => None,
+    };
+    let geometry = match cached {
+        Some(g) => {
+            for record in &g.mtl_materials {
+                let m = b.material(&record.desc, &record.context, Some(record.kd))?;
+                b.add_material(record.name.clone(), m);
+            }
+            b.report.cache = CacheUse::Hit;
+            g
+        }
+        None => {
+            for object in &desc.objects {
+                b.object(object, default_material)?;
+            }
+            let start = Instant::now();
+            let bvh = WideBvh::build_with(&b.triangles, &build_options);
+            b.report.bvh_build_seconds = start.elapsed().as_secs_f64();
+            for (k, e) in b.emitters.iter().enumerate() {
+                b.shading[e.triangle as usize].light = k as u32;
+            }
+            let g = Geometry {
+                triangles: std::mem::take(&mut b.triangles).into(),
+                shading: std::mem::take(&mut b.shading).into(),
+                emitters: std::mem::take(&mut b.emitters),
+                mtl_materials: std::mem::take(&mut b.mtl_records),
+                mesh_warnings: std::mem::take(&mut b.mesh_warnings),
+                degenerate_triangles_dropped: b.report.degenerate_triangles_dropped,
+                bvh,
+            };
+            if let (Some(c), Some(k)) = (cache, &key) {
+                b.report.cache = c.store(k, &g, file, &mut b.report.warnings);
+            }
+            g
+        }
+    };
+    b.report.degenerate_triangles_dropped = geometry.degenerate_triangles_dropped;
+    let mut warnings = geometry.mesh_warnings.clone();
+    warnings.append(&mut b.report.warnings);
+    b.report.warnings = warnings;
 
-    let bounds = b
+    let bounds = geometry
         .triangles
         .iter()
         .fold(Aabb::EMPTY, |a, t| a.union(Aabb::from_points(&t.v)));
     let mut lights = Vec::new();
-    for &(tri, radiance, two_sided) in &b.emitters {
-        b.shading[tri as usize].light = lights.len() as u32;
+    for e in &geometry.emitters {
         lights.push(Light::Area(AreaLight::new(
-            b.triangles[tri as usize],
-            tri,
-            radiance,
-            two_sided,
+            geometry.triangles[e.triangle as usize],
+            e.triangle,
+            e.radiance,
+            e.two_sided,
         )));
     }
     for (_, l) in &desc.lights {
@@ -120,10 +217,6 @@ pub fn load_desc(desc: SceneDesc) -> Result<Scene> {
             .warnings
             .push("the scene has no light that emits anything: the image will be black".into());
     }
-
-    let start = Instant::now();
-    let bvh = WideBvh::build(&b.triangles);
-    b.report.bvh_build_seconds = start.elapsed().as_secs_f64();
 
     let output = match &desc.film.output {
         Some(o) => format::resolve(file, o),
@@ -149,10 +242,10 @@ pub fn load_desc(desc: SceneDesc) -> Result<Scene> {
         display: desc.display,
         light_selector: LightSelector::new(&lights),
         lights,
-        bvh,
+        bvh: geometry.bvh,
         bounds,
-        triangles: b.triangles,
-        shading: b.shading,
+        triangles: geometry.triangles,
+        shading: geometry.shading,
         materials: b.materials,
         material_names: b.material_names,
         report: b.report,
@@ -274,7 +367,7 @@ impl Builder<'_> {
                 };
                 let obj = load_obj(file, *mtl_override)
                     .map_err(|e| Error::scene(self.file, format!("{path}.{file_key}"), e))?;
-                self.report.warnings.extend(obj.warnings);
+                self.mesh_warnings.extend(obj.warnings);
                 let mut mtl_indices: HashMap<String, (u32, Option<Rgb>)> = HashMap::new();
                 for group in obj.groups {
                     let (material, mtl_emission) = match (named, &group.material) {
@@ -340,16 +433,19 @@ impl Builder<'_> {
         if let Some(&found) = seen.get(&mtl.name) {
             return Ok(found);
         }
-        let material = self.material(
-            &mtl.desc,
-            &format!("{path} (material {})", mtl.name),
-            Some(mtl.kd),
-        )?;
+        let context = format!("{path} (material {})", mtl.name);
+        let material = self.material(&mtl.desc, &context, Some(mtl.kd))?;
         let name = format!(
             "{}:{}",
             file.file_name().unwrap_or_default().to_string_lossy(),
             mtl.name
         );
+        self.mtl_records.push(MtlRecord {
+            name: name.clone(),
+            context,
+            desc: mtl.desc.clone(),
+            kd: mtl.kd,
+        });
         let index = self.add_material(name, material);
         seen.insert(mtl.name.clone(), (index, mtl.emission));
         Ok((index, mtl.emission))
@@ -393,13 +489,17 @@ impl Builder<'_> {
             let index = self.triangles.len() as u32;
             self.triangles.push(tri);
             self.shading.push(TriangleShading {
-                normals: vertex_normals,
+                normals: vertex_normals.unwrap_or([Vec3::ZERO; 3]),
                 uvs,
                 material,
                 light: NO_LIGHT,
             });
-            if let Some(e) = emission {
-                self.emitters.push((index, e, o.two_sided));
+            if let Some(radiance) = emission {
+                self.emitters.push(Emitter {
+                    triangle: index,
+                    radiance,
+                    two_sided: o.two_sided,
+                });
             }
         }
     }

@@ -1,6 +1,7 @@
 //! The scene: what the renderer reads ([`format`], [`trs`], [`obj`],
 //! [`texture`]) and the prepared, renderable result ([`Scene`]).
 
+pub mod cache;
 pub mod desc;
 pub mod format;
 mod load;
@@ -8,13 +9,16 @@ pub mod obj;
 pub mod texture;
 pub mod trs;
 
-pub use load::{load, load_desc, parse_file};
+pub use load::{
+    load, load_cached, load_desc, load_desc_cached, parse_file, Emitter, Geometry, MtlRecord,
+};
 
 use crate::bvh::{Hit, WideBvh};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Ray, Triangle};
 use crate::light::{Light, LightSelector};
 use crate::material::{Material, SurfacePoint};
+use crate::pod_array::PodArray;
 use desc::{CameraDesc, Display, IntegratorKind, Tonemap};
 use glam::{Vec2, Vec3};
 use std::path::PathBuf;
@@ -22,15 +26,24 @@ use std::path::PathBuf;
 /// Marks a triangle that is not part of an area light.
 pub const NO_LIGHT: u32 = u32::MAX;
 
-/// What shading needs of a triangle beyond its vertices.
-#[derive(Clone, Copy, Debug)]
+/// What shading needs of a triangle beyond its vertices. A plain record of
+/// fixed layout, so the scene cache stores and loads it as bytes.
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub struct TriangleShading {
-    /// Per-vertex shading normals, if the mesh has them.
-    pub normals: Option<[Vec3; 3]>,
+    /// Per-vertex shading normals; all zero when the mesh has none (a mesh's
+    /// normals are only kept when none of the three is zero).
+    pub normals: [Vec3; 3],
     pub uvs: [Vec2; 3],
     pub material: u32,
     /// Index into [`Scene::lights`] for emissive triangles, else [`NO_LIGHT`].
     pub light: u32,
+}
+
+impl TriangleShading {
+    pub fn has_normals(&self) -> bool {
+        self.normals[0] != Vec3::ZERO
+    }
 }
 
 /// Render settings after the scene's `film` and `render` blocks and any
@@ -55,6 +68,8 @@ pub struct LoadReport {
     pub degenerate_triangles_dropped: usize,
     pub warnings: Vec<String>,
     pub bvh_build_seconds: f64,
+    /// Whether the geometry came from the scene cache.
+    pub cache: cache::CacheUse,
 }
 
 pub struct Scene {
@@ -64,8 +79,8 @@ pub struct Scene {
     pub camera: Camera,
     pub settings: Settings,
     pub display: Option<Display>,
-    pub triangles: Vec<Triangle>,
-    pub shading: Vec<TriangleShading>,
+    pub triangles: PodArray<Triangle>,
+    pub shading: PodArray<TriangleShading>,
     pub materials: Vec<Material>,
     pub material_names: Vec<String>,
     pub lights: Vec<Light>,
@@ -92,7 +107,7 @@ impl Scene {
         let (b1, b2) = (hit.b1, hit.b2);
         let b0 = 1.0 - b1 - b2;
         let ng = tri.normal();
-        let ns = match sh.normals {
+        let ns = match sh.has_normals().then_some(sh.normals) {
             Some(n) => {
                 let n = (b0 * n[0] + b1 * n[1] + b2 * n[2]).normalize_or_zero();
                 match n.dot(ng) {

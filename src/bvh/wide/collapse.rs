@@ -62,8 +62,8 @@ impl WideBvh {
                 triangles: order.len(),
                 ..BuildReport::default()
             },
-            nodes: c.nodes,
-            blocks: c.blocks,
+            nodes: c.nodes.into(),
+            blocks: c.blocks.into(),
         };
         wide.report.sah_cost = wide.sah_cost();
         wide

@@ -21,6 +21,7 @@ pub use packet::PACKET_SIZE;
 
 use super::BuildOptions;
 use crate::geometry::{Aabb, Triangle};
+use crate::pod_array::PodArray;
 
 /// A child reference with this bit set names a leaf block, not a node; the
 /// next two bits hold its triangle count minus one, the rest its index.
@@ -33,7 +34,7 @@ const EMPTY_CHILD: u32 = u32::MAX;
 /// Four children's boxes: `bounds[axis]` holds the minima along `axis` for
 /// the four children, `bounds[3 + axis]` the maxima. Unused slots hold an
 /// empty box (min +∞, max −∞), which no ray enters.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(16))]
 pub struct Node4 {
     pub bounds: [[f32; 4]; 6],
@@ -43,7 +44,7 @@ pub struct Node4 {
 
 /// Up to four triangles, one per lane: `v[vertex][axis][lane]`. Unused
 /// lanes are zero, with id `u32::MAX`, and masked off by the leaf's count.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(16))]
 pub struct TriangleBlock {
     pub v: [[[f32; 4]; 3]; 3],
@@ -67,8 +68,8 @@ pub struct BuildReport {
 }
 
 pub struct WideBvh {
-    nodes: Vec<Node4>,
-    blocks: Vec<TriangleBlock>,
+    nodes: PodArray<Node4>,
+    blocks: PodArray<TriangleBlock>,
     /// The root: a node, a single leaf block, or `EMPTY_CHILD` for no triangles.
     root: u32,
     bounds: Aabb,
@@ -107,6 +108,67 @@ impl WideBvh {
 
     pub fn blocks(&self) -> &[TriangleBlock] {
         &self.blocks
+    }
+
+    /// The root reference: a node, a leaf block, or `u32::MAX` when empty.
+    pub fn root(&self) -> u32 {
+        self.root
+    }
+
+    /// Reassembles a BVH from its parts (the scene cache's sections),
+    /// checking that every reference stays in bounds and points forward, as
+    /// the collapse lays nodes out, so a damaged tree can neither index out
+    /// of range nor loop.
+    pub fn from_parts(
+        nodes: PodArray<Node4>,
+        blocks: PodArray<TriangleBlock>,
+        root: u32,
+        bounds: Aabb,
+        report: BuildReport,
+        triangle_count: usize,
+    ) -> Result<WideBvh, String> {
+        let check = |reference: u32, parent: Option<usize>| -> Result<(), String> {
+            if reference == EMPTY_CHILD {
+                return Ok(());
+            }
+            if reference & LEAF_BIT != 0 {
+                let block = (reference & LEAF_INDEX_MASK) as usize;
+                return match blocks.get(block) {
+                    None => Err(format!("leaf block {block} of {}", blocks.len())),
+                    Some(b)
+                        if b.id
+                            .iter()
+                            .any(|&id| id != u32::MAX && id as usize >= triangle_count) =>
+                    {
+                        Err(format!(
+                            "leaf block {block} names a triangle beyond {triangle_count}"
+                        ))
+                    }
+                    Some(_) => Ok(()),
+                };
+            }
+            let node = reference as usize;
+            if node >= nodes.len() || parent.is_some_and(|p| node <= p) {
+                return Err(format!("node reference {node} (of {})", nodes.len()));
+            }
+            Ok(())
+        };
+        check(root, None)?;
+        if nodes.is_empty() != (root == EMPTY_CHILD || root & LEAF_BIT != 0) {
+            return Err("the root does not match the node count".into());
+        }
+        for (i, node) in nodes.iter().enumerate() {
+            for &child in &node.children {
+                check(child, Some(i))?;
+            }
+        }
+        Ok(WideBvh {
+            nodes,
+            blocks,
+            root,
+            bounds,
+            report,
+        })
     }
 
     /// Bytes of nodes and leaf blocks.

@@ -1,0 +1,539 @@
+//! The scene cache: a scene's prepared geometry (world-space triangles,
+//! shading data, emitters, MTL materials) and its 4-wide BVH, kept on disk
+//! so that rendering the same scene again skips parsing meshes and building
+//! the BVH.
+//!
+//! Entries live in one folder, one file per key (`<key>.tcache`, see
+//! [`key`]); the file format is in [`entry`]. Nothing read is trusted: an
+//! entry that fails any check is reported in one warning, removed and
+//! rebuilt. Entries are written to a temporary file and renamed into place,
+//! so a reader sees a whole entry or none, and two renders storing the same
+//! entry at once both leave a whole one. Each use refreshes an entry's
+//! modification time, which `prune` reads as "last used".
+
+pub mod entry;
+pub mod key;
+
+pub use key::{scene_key, Key};
+
+use super::{Emitter, Geometry, MtlRecord, TriangleShading, NO_LIGHT};
+use crate::bvh::wide::BuildReport;
+use crate::bvh::WideBvh;
+use crate::color::Rgb;
+use crate::geometry::Aabb;
+use crate::pod_array::PodArray;
+use crate::scene::desc::{AlbedoDesc, MaterialDesc};
+use bytemuck::{Pod, Zeroable};
+use entry::{Invalid, Section, SectionReader};
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, SystemTime};
+
+const EXTENSION: &str = "tcache";
+/// Scenes smaller than this load faster than an entry would: not stored.
+pub const DEFAULT_MIN_TRIANGLES: usize = 10_000;
+
+/// What the cache did for one load.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum CacheUse {
+    /// No cache was asked for.
+    #[default]
+    Off,
+    /// The geometry and BVH came from the cache.
+    Hit,
+    /// Built, and stored for next time.
+    Stored,
+    /// Built, not stored (too small, or the folder cannot be written).
+    NotStored,
+}
+
+pub struct Cache {
+    dir: PathBuf,
+    min_triangles: usize,
+}
+
+/// One entry, as `tracer cache list` shows it.
+#[derive(Clone, Debug)]
+pub struct EntryInfo {
+    pub path: PathBuf,
+    pub key: String,
+    /// The scene file that made it, or why the entry cannot be read.
+    pub scene: std::result::Result<String, String>,
+    pub bytes: u64,
+    pub last_used: SystemTime,
+}
+
+impl Cache {
+    pub fn new(dir: impl Into<PathBuf>) -> Cache {
+        Cache {
+            dir: dir.into(),
+            min_triangles: DEFAULT_MIN_TRIANGLES,
+        }
+    }
+
+    /// Stores scenes of at least `n` triangles (default [`DEFAULT_MIN_TRIANGLES`]).
+    pub fn with_min_triangles(mut self, n: usize) -> Cache {
+        self.min_triangles = n;
+        self
+    }
+
+    /// `$TRACER_CACHE_DIR`, else the platform's cache folder
+    /// (`~/.cache/tracer` on Linux, `~/Library/Caches/tracer` on macOS).
+    pub fn default_dir() -> Option<PathBuf> {
+        if let Some(dir) = std::env::var_os("TRACER_CACHE_DIR").filter(|d| !d.is_empty()) {
+            return Some(dir.into());
+        }
+        directories::ProjectDirs::from("", "", "tracer").map(|d| d.cache_dir().to_path_buf())
+    }
+
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    pub fn entry_path(&self, key: &Key) -> PathBuf {
+        self.dir.join(format!("{}.{EXTENSION}", hex(key)))
+    }
+
+    /// The geometry stored under `key`, if a sound entry is there. A bad
+    /// entry is removed and named in one line pushed to `warnings`.
+    /// `scene_materials`: how many materials the scene defines before the
+    /// entry's MTL materials, so material indices can be checked.
+    pub fn lookup(
+        &self,
+        key: &Key,
+        scene_materials: usize,
+        warnings: &mut Vec<String>,
+    ) -> Option<Geometry> {
+        let path = self.entry_path(key);
+        // Not there, or the folder is unusable: a miss (storing will say
+        // so if the folder cannot be written).
+        let meta = std::fs::symlink_metadata(&path).ok()?;
+        let result = if meta.is_file() {
+            read_entry(&path, key, scene_materials)
+        } else {
+            Err(Invalid::Malformed("not a regular file".into()))
+        };
+        match result {
+            Ok(g) => {
+                // Refresh "last used" for prune; failing to is harmless.
+                if let Ok(f) = File::options().append(true).open(&path) {
+                    let _ = f.set_modified(SystemTime::now());
+                }
+                Some(g)
+            }
+            Err(reason) => {
+                let removed = if meta.is_dir() {
+                    std::fs::remove_dir_all(&path)
+                } else {
+                    std::fs::remove_file(&path)
+                };
+                let action = match removed {
+                    Ok(()) => "removed it, rebuilding",
+                    Err(_) => "could not remove it, rebuilding",
+                };
+                warnings.push(format!(
+                    "cache entry {} is invalid ({reason}); {action}",
+                    path.display()
+                ));
+                None
+            }
+        }
+    }
+
+    /// Stores `geometry` under `key`, atomically. Problems become a warning
+    /// and the render goes on without the cache.
+    pub fn store(
+        &self,
+        key: &Key,
+        geometry: &Geometry,
+        scene_file: &Path,
+        warnings: &mut Vec<String>,
+    ) -> CacheUse {
+        if geometry.triangles.len() < self.min_triangles {
+            return CacheUse::NotStored;
+        }
+        match self.write_entry(key, geometry, scene_file) {
+            Ok(()) => CacheUse::Stored,
+            Err(e) => {
+                warnings.push(format!(
+                    "cannot write to the scene cache in {} ({e}); continuing without it",
+                    self.dir.display()
+                ));
+                CacheUse::NotStored
+            }
+        }
+    }
+
+    fn write_entry(&self, key: &Key, g: &Geometry, scene_file: &Path) -> std::io::Result<()> {
+        std::fs::create_dir_all(&self.dir)?;
+        let meta = serde_json::to_vec(&Meta::of(g, scene_file)).map_err(std::io::Error::other)?;
+        let emitters: Vec<EmitterRecord> = g.emitters.iter().map(EmitterRecord::from).collect();
+        let sections = [
+            Section::of(SECTION_META, &meta),
+            Section::of(SECTION_TRIANGLES, &g.triangles),
+            Section::of(SECTION_SHADING, &g.shading),
+            Section::of(SECTION_EMITTERS, &emitters),
+            Section::of(SECTION_NODES, g.bvh.nodes()),
+            Section::of(SECTION_BLOCKS, g.bvh.blocks()),
+        ];
+        let target = self.entry_path(key);
+        let temp = self.dir.join(temp_name(key));
+        let written = (|| {
+            let file = File::create(&temp)?;
+            let mut out = BufWriter::with_capacity(1 << 20, file);
+            entry::write(&mut out, key, &sections)?;
+            out.flush()?;
+            out.get_ref().sync_all()?;
+            drop(out);
+            std::fs::rename(&temp, &target)
+        })();
+        if written.is_err() {
+            let _ = std::fs::remove_file(&temp);
+        }
+        written
+    }
+
+    /// Every entry, least recently used first; temporary files are skipped.
+    pub fn list(&self) -> std::io::Result<Vec<EntryInfo>> {
+        let mut entries = Vec::new();
+        let dir = match std::fs::read_dir(&self.dir) {
+            Ok(d) => d,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(entries),
+            Err(e) => return Err(e),
+        };
+        for item in dir {
+            let item = item?;
+            let path = item.path();
+            if path.extension().and_then(|e| e.to_str()) != Some(EXTENSION) {
+                continue;
+            }
+            let meta = item.metadata()?;
+            entries.push(EntryInfo {
+                key: path
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                scene: read_scene_name(&path).map_err(|e| e.to_string()),
+                bytes: meta.len(),
+                last_used: meta.modified().unwrap_or(SystemTime::UNIX_EPOCH),
+                path,
+            });
+        }
+        entries.sort_by_key(|e| e.last_used);
+        Ok(entries)
+    }
+
+    /// Removes every entry and any temporary file left by an interrupted
+    /// write; returns how many files and bytes went.
+    pub fn clear(&self) -> std::io::Result<(usize, u64)> {
+        let mut removed = (0, 0);
+        let dir = match std::fs::read_dir(&self.dir) {
+            Ok(d) => d,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(removed),
+            Err(e) => return Err(e),
+        };
+        for item in dir {
+            let path = item?.path();
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            let ours = name.ends_with(&format!(".{EXTENSION}")) || is_stale_temp(&path);
+            if ours {
+                let bytes = std::fs::metadata(&path).map_or(0, |m| m.len());
+                if std::fs::remove_file(&path).is_ok() {
+                    removed.0 += 1;
+                    removed.1 += bytes;
+                }
+            }
+        }
+        Ok(removed)
+    }
+
+    /// Removes least recently used entries until the rest fit in `max_bytes`;
+    /// returns how many files and bytes went.
+    pub fn prune(&self, max_bytes: u64) -> std::io::Result<(usize, u64)> {
+        let entries = self.list()?;
+        let mut total: u64 = entries.iter().map(|e| e.bytes).sum();
+        let mut removed = (0, 0);
+        for e in entries {
+            if total <= max_bytes {
+                break;
+            }
+            if std::fs::remove_file(&e.path).is_ok() {
+                total -= e.bytes;
+                removed.0 += 1;
+                removed.1 += e.bytes;
+            }
+        }
+        Ok(removed)
+    }
+}
+
+/// A name no other writer uses at the same moment: process id and a counter.
+fn temp_name(key: &Key) -> String {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    format!(".{}.{}-{n}.tmp", hex(key), std::process::id())
+}
+
+/// A temporary file more than an hour old: its writer is gone.
+fn is_stale_temp(path: &Path) -> bool {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    name.starts_with('.')
+        && name.ends_with(".tmp")
+        && std::fs::metadata(path)
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age > Duration::from_secs(3600))
+}
+
+pub fn hex(key: &Key) -> String {
+    key.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+const SECTION_META: u32 = 1;
+const SECTION_TRIANGLES: u32 = 2;
+const SECTION_SHADING: u32 = 3;
+const SECTION_EMITTERS: u32 = 4;
+const SECTION_NODES: u32 = 5;
+const SECTION_BLOCKS: u32 = 6;
+
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct EmitterRecord {
+    triangle: u32,
+    radiance: [f32; 3],
+    two_sided: u32,
+}
+
+impl From<&Emitter> for EmitterRecord {
+    fn from(e: &Emitter) -> Self {
+        EmitterRecord {
+            triangle: e.triangle,
+            radiance: e.radiance.to_array(),
+            two_sided: e.two_sided as u32,
+        }
+    }
+}
+
+/// The small, variable-sized part of an entry, as JSON.
+#[derive(Serialize, Deserialize)]
+struct Meta {
+    scene: String,
+    triangles: usize,
+    degenerate_triangles_dropped: usize,
+    mesh_warnings: Vec<String>,
+    mtl_materials: Vec<MtlJson>,
+    bvh_root: u32,
+    bvh_bounds: [[f32; 3]; 2],
+    bvh_binary_sah_cost: f32,
+    bvh_sah_cost: f32,
+}
+
+#[derive(Serialize, Deserialize)]
+struct MtlJson {
+    name: String,
+    context: String,
+    kd: [f32; 3],
+    #[serde(flatten)]
+    material: MaterialJson,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+enum MaterialJson {
+    Diffuse { albedo: [f32; 3] },
+    DiffuseTexture { texture: PathBuf },
+    Mirror { reflectance: [f32; 3] },
+    Dielectric { ior: f32, transmittance: [f32; 3] },
+}
+
+impl Meta {
+    fn of(g: &Geometry, scene_file: &Path) -> Meta {
+        let r = g.bvh.report();
+        let b = g.bvh.bounds();
+        Meta {
+            scene: scene_file.display().to_string(),
+            triangles: g.triangles.len(),
+            degenerate_triangles_dropped: g.degenerate_triangles_dropped,
+            mesh_warnings: g.mesh_warnings.clone(),
+            mtl_materials: g
+                .mtl_materials
+                .iter()
+                .map(|m| MtlJson {
+                    name: m.name.clone(),
+                    context: m.context.clone(),
+                    kd: m.kd.to_array(),
+                    material: match &m.desc {
+                        MaterialDesc::Diffuse {
+                            albedo: AlbedoDesc::Constant(c),
+                        } => MaterialJson::Diffuse {
+                            albedo: c.to_array(),
+                        },
+                        MaterialDesc::Diffuse {
+                            albedo: AlbedoDesc::Texture(t),
+                        } => MaterialJson::DiffuseTexture { texture: t.clone() },
+                        MaterialDesc::Mirror { reflectance } => MaterialJson::Mirror {
+                            reflectance: reflectance.to_array(),
+                        },
+                        MaterialDesc::Dielectric { ior, transmittance } => {
+                            MaterialJson::Dielectric {
+                                ior: *ior,
+                                transmittance: transmittance.to_array(),
+                            }
+                        }
+                    },
+                })
+                .collect(),
+            bvh_root: g.bvh.root(),
+            bvh_bounds: [b.min.to_array(), b.max.to_array()],
+            bvh_binary_sah_cost: r.binary_sah_cost,
+            bvh_sah_cost: r.sah_cost,
+        }
+    }
+}
+
+fn mtl_record(m: MtlJson) -> MtlRecord {
+    MtlRecord {
+        name: m.name,
+        context: m.context,
+        kd: Rgb::from_array(m.kd),
+        desc: match m.material {
+            MaterialJson::Diffuse { albedo } => MaterialDesc::Diffuse {
+                albedo: AlbedoDesc::Constant(Rgb::from_array(albedo)),
+            },
+            MaterialJson::DiffuseTexture { texture } => MaterialDesc::Diffuse {
+                albedo: AlbedoDesc::Texture(texture),
+            },
+            MaterialJson::Mirror { reflectance } => MaterialDesc::Mirror {
+                reflectance: Rgb::from_array(reflectance),
+            },
+            MaterialJson::Dielectric { ior, transmittance } => MaterialDesc::Dielectric {
+                ior,
+                transmittance: Rgb::from_array(transmittance),
+            },
+        },
+    }
+}
+
+fn open_entry(path: &Path) -> Result<(Arc<memmap2::Mmap>, entry::Header), Invalid> {
+    let file = File::open(path)?;
+    if file.metadata()?.len() == 0 {
+        return Err(Invalid::Length("empty file".into()));
+    }
+    // SAFETY: entries are never modified in place: writers create a new
+    // file and rename it over the old one, which leaves this mapping's file
+    // intact. (Truncating an entry by hand while a render maps it would
+    // crash that render, as with any mapped file.) Populating faults every
+    // page in at once, which the checksum needs anyway.
+    let map = unsafe { memmap2::MmapOptions::new().populate().map(&file)? };
+    let map = Arc::new(map);
+    let header = entry::read_header(&map)?;
+    Ok((map, header))
+}
+
+fn read_scene_name(path: &Path) -> Result<String, Invalid> {
+    let (map, header) = open_entry(path)?;
+    let mut sections = SectionReader::new(&map, &header);
+    let meta: Meta = serde_json::from_slice(&sections.take::<u8>(SECTION_META)?)
+        .map_err(|e| Invalid::Malformed(format!("metadata: {e}")))?;
+    Ok(meta.scene)
+}
+
+fn read_entry(path: &Path, key: &Key, scene_materials: usize) -> Result<Geometry, Invalid> {
+    let (map, header) = open_entry(path)?;
+    if header.key != *key {
+        return Err(Invalid::Key);
+    }
+    let mut sections = SectionReader::new(&map, &header);
+    let meta_bytes = sections.take::<u8>(SECTION_META)?;
+    let triangles = sections.take(SECTION_TRIANGLES)?;
+    let shading: PodArray<TriangleShading> = sections.take(SECTION_SHADING)?;
+    let emitters: PodArray<EmitterRecord> = sections.take(SECTION_EMITTERS)?;
+    let nodes = sections.take(SECTION_NODES)?;
+    let blocks = sections.take(SECTION_BLOCKS)?;
+    sections.finish()?;
+
+    let malformed = |what: String| Invalid::Malformed(what);
+    let meta: Meta =
+        serde_json::from_slice(&meta_bytes).map_err(|e| malformed(format!("metadata: {e}")))?;
+    let count = triangles.len();
+    if meta.triangles != count || shading.len() != count {
+        return Err(malformed(format!(
+            "{} triangles, {} shading records, metadata says {}",
+            count,
+            shading.len(),
+            meta.triangles
+        )));
+    }
+    let materials = scene_materials + meta.mtl_materials.len();
+    let lit = shading.iter().filter(|s| s.light != NO_LIGHT).count();
+    if shading.iter().any(|s| s.material as usize >= materials) {
+        return Err(malformed("a material index out of range".into()));
+    }
+    let emitter_of = |k: usize, e: &EmitterRecord| {
+        shading
+            .get(e.triangle as usize)
+            .is_some_and(|s| s.light as usize == k)
+    };
+    if lit != emitters.len() || !emitters.iter().enumerate().all(|(k, e)| emitter_of(k, e)) {
+        return Err(malformed("emitters and light indices disagree".into()));
+    }
+    let bounds = Aabb {
+        min: Vec3::from_array(meta.bvh_bounds[0]),
+        max: Vec3::from_array(meta.bvh_bounds[1]),
+    };
+    let report = BuildReport {
+        // Not stored, so that the same geometry always makes the same bytes.
+        seconds: 0.0,
+        binary_sah_cost: meta.bvh_binary_sah_cost,
+        sah_cost: meta.bvh_sah_cost,
+        nodes: nodes.len(),
+        leaves: blocks.len(),
+        triangles: count,
+    };
+    let bvh = WideBvh::from_parts(nodes, blocks, meta.bvh_root, bounds, report, count)
+        .map_err(|e| malformed(format!("BVH: {e}")))?;
+    Ok(Geometry {
+        triangles,
+        shading,
+        emitters: emitters
+            .iter()
+            .map(|e| Emitter {
+                triangle: e.triangle,
+                radiance: Rgb::from_array(e.radiance),
+                two_sided: e.two_sided != 0,
+            })
+            .collect(),
+        mtl_materials: meta.mtl_materials.into_iter().map(mtl_record).collect(),
+        mesh_warnings: meta.mesh_warnings,
+        degenerate_triangles_dropped: meta.degenerate_triangles_dropped,
+        bvh,
+    })
+}
+
+/// Parses a size such as `2G`, `500M`, `1.5GiB`, `64k` or `1000000`
+/// (binary multiples: `1G` is 2^30 bytes).
+pub fn parse_size(s: &str) -> std::result::Result<u64, String> {
+    let t = s.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let number: f64 = number
+        .parse()
+        .map_err(|_| format!("expected a size such as 2G or 500M, found {s:?}"))?;
+    let shift = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 0,
+        "k" | "kb" | "kib" => 10,
+        "m" | "mb" | "mib" => 20,
+        "g" | "gb" | "gib" => 30,
+        "t" | "tb" | "tib" => 40,
+        _ => return Err(format!("unknown size unit in {s:?}: use K, M, G or T")),
+    };
+    Ok((number * (1u64 << shift) as f64) as u64)
+}
