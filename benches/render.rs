@@ -13,6 +13,7 @@ fn benches(c: &mut Criterion) {
     let options = RenderOptions {
         threads: Some(2),
         progress: false,
+        ..RenderOptions::default()
     };
     for name in ["cornell-box", "cornell-caustics"] {
         let mut group = c.benchmark_group(format!("render/{name}"));

@@ -158,6 +158,7 @@ fn render_workload(name: &str, slowdown: f64) {
     let options = RenderOptions {
         threads: Some(1),
         progress: false,
+        ..RenderOptions::default()
     };
     measured(|| {
         for scene in std::iter::once(&full).chain(extra.as_ref()) {

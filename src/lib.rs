@@ -18,6 +18,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod pod_array;
+pub mod preview;
 pub mod render;
 pub mod sampling;
 pub mod scene;

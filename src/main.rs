@@ -4,8 +4,11 @@ use clap::Parser;
 
 fn main() {
     let cli = tracer::cli::Cli::parse();
-    if let Err(e) = tracer::cli::run(cli) {
-        eprintln!("error: {e}");
-        std::process::exit(1);
+    match tracer::cli::run(cli) {
+        Ok(status) => std::process::exit(status),
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
     }
 }

@@ -81,6 +81,7 @@ fn image(scene: &Scene) -> tracer::film::Image {
     let options = RenderOptions {
         threads: Some(2),
         progress: false,
+        ..RenderOptions::default()
     };
     render(scene, &options).unwrap().0
 }

@@ -22,6 +22,7 @@ fn same_seed_same_image_for_any_thread_count() {
             let options = RenderOptions {
                 threads: Some(threads),
                 progress: false,
+                ..RenderOptions::default()
             };
             render(&scene, &options).unwrap().0
         })

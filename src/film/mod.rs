@@ -1,5 +1,6 @@
 //! The image: linear radiance per pixel, tone mapping, and the writers.
 
+pub mod metadata;
 pub mod tonemap;
 pub mod write;
 

@@ -5,6 +5,7 @@
 //! target, flushed to disk and renamed into place: an interrupted or failed
 //! write never leaves a broken image, nor destroys the previous one.
 
+use super::metadata::{sidecar_path, Metadata};
 use super::tonemap::to_8bit;
 use super::Image;
 use crate::scene::desc::Tonemap;
@@ -36,14 +37,31 @@ impl ImageFormat {
 
 /// Writes `image` to `path` in the format its extension names.
 pub fn write_image(path: &Path, image: &Image, tonemap: Tonemap, exposure: f32) -> Result<()> {
+    write_image_with(path, image, tonemap, exposure, None)
+}
+
+/// Writes `image` with `metadata`: in the header of an EXR, else in a JSON
+/// sidecar beside the image (written first, so an image never lacks it).
+pub fn write_image_with(
+    path: &Path,
+    image: &Image,
+    tonemap: Tonemap,
+    exposure: f32,
+    metadata: Option<&Metadata>,
+) -> Result<()> {
     let format = ImageFormat::from_path(path).ok_or_else(|| Error::Image {
         path: path.to_path_buf(),
         message: "unknown image format: use .exr, .pfm, .png or .tga".into(),
     })?;
-    let bytes = encode(image, format, tonemap, exposure).map_err(|message| Error::Image {
-        path: path.to_path_buf(),
-        message,
-    })?;
+    let bytes =
+        encode(image, format, tonemap, exposure, metadata).map_err(|message| Error::Image {
+            path: path.to_path_buf(),
+            message,
+        })?;
+    if let (Some(m), false) = (metadata, format == ImageFormat::Exr) {
+        let json = serde_json::to_vec_pretty(m).expect("metadata serialises");
+        write_atomic(&sidecar_path(path), &json)?;
+    }
     write_atomic(path, &bytes)
 }
 
@@ -52,9 +70,10 @@ pub fn encode(
     format: ImageFormat,
     tonemap: Tonemap,
     exposure: f32,
+    metadata: Option<&Metadata>,
 ) -> std::result::Result<Vec<u8>, String> {
     match format {
-        ImageFormat::Exr => encode_exr(image),
+        ImageFormat::Exr => encode_exr(image, metadata),
         ImageFormat::Pfm => Ok(encode_pfm(image)),
         ImageFormat::Png | ImageFormat::Tga => {
             let rgb: Vec<u8> = image
@@ -76,14 +95,27 @@ pub fn encode(
     }
 }
 
-fn encode_exr(image: &Image) -> std::result::Result<Vec<u8>, String> {
+fn encode_exr(image: &Image, metadata: Option<&Metadata>) -> std::result::Result<Vec<u8>, String> {
     use exr::prelude::*;
     let w = image.width as usize;
     let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
         let c = image.pixels[p.y() * w + p.x()];
         (c.x, c.y, c.z)
     });
-    let exr_image = exr::prelude::Image::from_channels((w, image.height as usize), channels);
+    let mut attributes = LayerAttributes::default();
+    if let Some(m) = metadata {
+        attributes.software_name = Some(Text::from(m.program.as_str()));
+        for (key, value) in m.exr_attributes() {
+            attributes.other.insert(Text::from(key.as_str()), value);
+        }
+    }
+    let layer = Layer::new(
+        (w, image.height as usize),
+        attributes,
+        Encoding::default(),
+        channels,
+    );
+    let exr_image = exr::prelude::Image::from_layer(layer);
     let mut out = Cursor::new(Vec::new());
     exr_image
         .write()
@@ -170,6 +202,51 @@ pub fn read_pfm(path: &Path) -> Result<Image> {
         image.set(x, y, glam::Vec3::new(f(0), f(4), f(8)));
     }
     Ok(image)
+}
+
+/// Reads a linear image and the metadata `tracer` wrote with it (EXR
+/// attributes, or a PFM's JSON sidecar).
+pub fn read_with_metadata(path: &Path) -> Result<(Image, Metadata)> {
+    let bad = |message: String| Error::Image {
+        path: path.to_path_buf(),
+        message,
+    };
+    match ImageFormat::from_path(path) {
+        Some(ImageFormat::Exr) => {
+            use exr::prelude::*;
+            let image = read()
+                .no_deep_data()
+                .largest_resolution_level()
+                .rgb_channels(
+                    |size: Vec2<usize>, _: &RgbChannels| {
+                        super::Image::new(size.width() as u32, size.height() as u32)
+                    },
+                    |image: &mut super::Image, p: Vec2<usize>, (r, g, b): (f32, f32, f32)| {
+                        image.set(p.x() as u32, p.y() as u32, glam::Vec3::new(r, g, b))
+                    },
+                )
+                .first_valid_layer()
+                .all_attributes()
+                .from_file(path)
+                .map_err(|e| bad(format!("cannot decode: {e}")))?;
+            let layer = image.layer_data;
+            let metadata = Metadata::from_exr_attributes(&layer.attributes.other).map_err(bad)?;
+            Ok((layer.channel_data.pixels, metadata))
+        }
+        Some(ImageFormat::Pfm) => {
+            let image = read_pfm(path)?;
+            let side = sidecar_path(path);
+            let text = std::fs::read(&side).map_err(|e| Error::io(&side, e))?;
+            let metadata = serde_json::from_slice(&text).map_err(|e| Error::Image {
+                path: side.clone(),
+                message: format!("not tracer metadata: {e}"),
+            })?;
+            Ok((image, metadata))
+        }
+        _ => Err(bad(
+            "partial renders must be .exr (or .pfm with its .json sidecar)".into(),
+        )),
+    }
 }
 
 /// Reads a linear image written by `tracer` (or any tool): `.pfm` or `.exr`.

@@ -1,5 +1,8 @@
 //! Drives a render: the image is cut into square tiles, and passes over all
-//! tiles add samples until the sample count or the time limit is reached.
+//! tiles add samples until the sample count, the time limit or the target
+//! noise is reached, or the render is interrupted. Each tile checks the
+//! time and the interruption flag before it starts, so a render stops
+//! within one tile's work, and each pixel is divided by its own sample count.
 //! Tiles are scheduled over rayon, one tile per thread at a time; each tile
 //! owns its pixels, so no locks are taken, and a pixel's samples are a pure
 //! function of the seed, so the image is the same for any thread count.
@@ -28,7 +31,9 @@ use crate::{Error, Result};
 use glam::DVec3;
 use progress::Progress;
 use rayon::prelude::*;
-use std::time::Instant;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 /// Tiles per batch for the splatting integrators: bounds the splat lists held
 /// at once (a few MB) while leaving enough tiles to keep every thread busy.
@@ -37,23 +42,79 @@ const SPLAT_BATCH: usize = 64;
 /// Light paths draw from a sequence of their own, independent of camera paths.
 const LIGHT_SEED_DOMAIN: u64 = 0x9e37_79b9_7f4a_7c15;
 
+/// A rectangle of pixels, `x0 .. x1` by `y0 .. y1`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Crop {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl Crop {
+    pub fn full(width: u32, height: u32) -> Crop {
+        Crop {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+
+    pub fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+
+    pub fn contains(&self, x: u32, y: u32) -> bool {
+        (self.x0..self.x1).contains(&x) && (self.y0..self.y1).contains(&y)
+    }
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct RenderOptions {
     /// Worker threads; `None` uses one per core.
     pub threads: Option<usize>,
     /// Show a progress bar on stderr (only drawn when stderr is a terminal).
     pub progress: bool,
+    /// Render only these pixels; the image returned covers just them.
+    pub crop: Option<Crop>,
+    /// Every pixel's samples are numbered from here, so processes given
+    /// disjoint ranges take disjoint samples of the same pixels.
+    pub sample_offset: u32,
+    /// Stop once the estimated mean relative error falls below this.
+    pub target_noise: Option<f64>,
+    /// Set from outside (a signal handler) to stop within a tile's time.
+    pub interrupt: Option<Arc<AtomicBool>>,
 }
 
 #[derive(Clone, Debug, Default)]
 pub struct RenderStats {
-    /// Samples taken per pixel (fewer than asked if the time limit stopped the render).
+    /// Samples taken per pixel; after an interruption, the fewest any pixel got.
     pub spp: u32,
+    /// The most any pixel got (differs from `spp` only after an interruption).
+    pub max_spp: u32,
     pub samples: u64,
     /// Samples whose estimate was NaN or infinite, replaced by zero.
     pub discarded: u64,
     pub seconds: f64,
     pub passes: u32,
+    /// The last noise estimate (mean relative error), once there is one.
+    pub noise: Option<f64>,
+    pub stopped_by: StopReason,
+}
+
+/// What ended a render.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StopReason {
+    #[default]
+    SampleCount,
+    TimeLimit,
+    TargetNoise,
+    Interrupted,
 }
 
 impl RenderStats {
@@ -62,8 +123,8 @@ impl RenderStats {
     }
 }
 
-/// Samples per pixel in pass `k`: 1, 1, 2, 4, … up to 64, so the time limit is
-/// checked often early on and rarely once the render is under way.
+/// Samples per pixel in pass `k`: 1, 1, 2, 4, … up to 64, so the stopping
+/// rules are checked often early on and rarely once the render is under way.
 fn pass_size(k: u32) -> u32 {
     1u32 << k.saturating_sub(1).min(6)
 }
@@ -76,68 +137,213 @@ pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
         .map_err(|e| Error::Unsupported(format!("cannot start worker threads: {e}")))
 }
 
+/// Everything a render has accumulated: the tiles' sums and, for the
+/// splatting integrators, the splats' sums over the whole image, each split
+/// into the two halves of even and odd sample indices.
+pub struct Accumulation {
+    width: u32,
+    crop: Crop,
+    tiles: Vec<Tile>,
+    splatting: bool,
+    splat_sums: [Vec<DVec3>; 2],
+    /// Light paths traced per half: one per pixel sample taken.
+    light_paths: [u64; 2],
+    full_pixels: u64,
+}
+
+impl Accumulation {
+    /// The image over the crop, each pixel divided by the samples it got.
+    pub fn image(&self) -> Image {
+        self.image_of(&[0, 1])
+    }
+
+    /// The mean over pixels of |A − B| / (A + B + 0.01), A and B the two
+    /// half images (channel means): the relative standard error of the
+    /// full image, estimated from two independent halves. `None` until
+    /// both halves have samples everywhere.
+    pub fn noise(&self) -> Option<f64> {
+        if self.tiles.iter().any(|t| t.samples.contains(&0)) {
+            return None;
+        }
+        let (a, b) = (self.image_of(&[0]), self.image_of(&[1]));
+        let sum: f64 = a
+            .pixels
+            .iter()
+            .zip(&b.pixels)
+            .map(|(a, b)| {
+                let (a, b) = (a.element_sum() as f64 / 3.0, b.element_sum() as f64 / 3.0);
+                (a - b).abs() / (a + b + 0.01)
+            })
+            .sum();
+        Some(sum / a.pixels.len().max(1) as f64)
+    }
+
+    fn image_of(&self, halves: &[usize]) -> Image {
+        let crop = self.crop;
+        let mut image = Image::new(crop.width(), crop.height());
+        for tile in &self.tiles {
+            let scale = 1.0 / tile.samples_in(halves).max(1) as f64;
+            for (x, y, sum) in tile.pixels(halves) {
+                if crop.contains(x, y) {
+                    image.set(x - crop.x0, y - crop.y0, (sum * scale).as_vec3());
+                }
+            }
+        }
+        if self.splatting {
+            // One light path per pixel sample: N paths estimate the image
+            // as (pixel count / N) times the splats' sum.
+            let paths: u64 = halves.iter().map(|&h| self.light_paths[h]).sum();
+            let scale = self.full_pixels as f64 / paths.max(1) as f64;
+            for y in crop.y0..crop.y1 {
+                for x in crop.x0..crop.x1 {
+                    let k = (y * self.width + x) as usize;
+                    let sum: DVec3 = halves.iter().map(|&h| self.splat_sums[h][k]).sum();
+                    let p = image.get(x - crop.x0, y - crop.y0);
+                    image.set(x - crop.x0, y - crop.y0, p + (sum * scale).as_vec3());
+                }
+            }
+        }
+        image
+    }
+
+    fn stats(&self, stats: &mut RenderStats) {
+        let counted = self.tiles.iter().filter(|t| self.overlaps_crop(t));
+        stats.spp = counted.clone().map(Tile::spp).min().unwrap_or(0);
+        stats.max_spp = counted.clone().map(Tile::spp).max().unwrap_or(0);
+        stats.samples = counted
+            .clone()
+            .map(|t| t.spp() as u64 * t.pixel_count() as u64)
+            .sum();
+        stats.discarded = self.tiles.iter().map(|t| t.discarded).sum();
+    }
+
+    fn overlaps_crop(&self, t: &Tile) -> bool {
+        t.x0 < self.crop.x1 && t.x1 > self.crop.x0 && t.y0 < self.crop.y1 && t.y1 > self.crop.y0
+    }
+}
+
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Image, RenderStats)> {
+    render_with(scene, options, |_, _| {})
+}
+
+/// Renders in passes until the sample count, the time limit, the target
+/// noise or an interruption stops it, calling `after_pass` with what has
+/// accumulated after every pass (to write checkpoints or show a preview).
+pub fn render_with(
+    scene: &Scene,
+    options: &RenderOptions,
+    mut after_pass: impl FnMut(&Accumulation, &RenderStats),
+) -> Result<(Image, RenderStats)> {
     let settings = &scene.settings;
     let pool = worker_pool(options.threads)?;
     let (width, height) = (settings.width, settings.height);
-    let mut tiles = tiles::split(width, height);
-    let pixels = width as u64 * height as u64;
-    let progress = Progress::new(options.progress, pixels * settings.spp as u64);
-    let start = Instant::now();
-    let mut stats = RenderStats::default();
+    let full = Crop::full(width, height);
+    let crop = options.crop.unwrap_or(full);
+    if crop.x0 >= crop.x1 || crop.y0 >= crop.y1 || crop.x1 > width || crop.y1 > height {
+        return Err(Error::Unsupported(format!(
+            "crop {},{},{},{} is not a non-empty part of the {width}x{height} image",
+            crop.x0, crop.y0, crop.x1, crop.y1
+        )));
+    }
     let splatting = settings.integrator != IntegratorKind::Pt;
-    let mut splat_sums = vec![DVec3::ZERO; if splatting { pixels as usize } else { 0 }];
+    // Light paths land anywhere: a splatting integrator traces the paths of
+    // every pixel, so that a crop's pixels receive all their light.
+    let traced = if splatting { full } else { crop };
+    let full_pixels = width as u64 * height as u64;
+    let splat_len = if splatting { full_pixels as usize } else { 0 };
+    let mut acc = Accumulation {
+        width,
+        crop,
+        tiles: tiles::split(traced),
+        splatting,
+        splat_sums: [vec![DVec3::ZERO; splat_len], vec![DVec3::ZERO; splat_len]],
+        light_paths: [0, 0],
+        full_pixels,
+    };
+    let traced_pixels = traced.width() as u64 * traced.height() as u64;
+    let progress = Progress::new(options.progress, traced_pixels * settings.spp as u64);
+    let start = Instant::now();
+    let deadline = settings.time_limit.map(Duration::from_secs_f32);
+    let interrupted = || {
+        options
+            .interrupt
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
+    };
+    let stop_now = || interrupted() || deadline.is_some_and(|d| start.elapsed() >= d);
     let batch = if splatting {
         SPLAT_BATCH
     } else {
-        tiles.len().max(1)
+        acc.tiles.len().max(1)
     };
+    let mut stats = RenderStats::default();
+    let mut taken = 0u32;
 
-    while stats.spp < settings.spp {
-        let first = stats.spp;
-        let count = pass_size(stats.passes).min(settings.spp - first);
-        for tiles in tiles.chunks_mut(batch) {
-            let lists: Vec<Vec<crate::film::Splat>> = pool.install(|| {
+    while taken < settings.spp {
+        let first = options.sample_offset + taken;
+        let count = pass_size(stats.passes).min(settings.spp - taken);
+        for tiles in acc.tiles.chunks_mut(batch) {
+            let lists: Vec<Option<[Vec<crate::film::Splat>; 2]>> = pool.install(|| {
                 tiles
                     .par_iter_mut()
                     .map(|tile| {
-                        let mut sink = SplatSink::default();
-                        render_tile(scene, settings, tile, first, count, &mut sink);
-                        tile.discarded += sink.discarded;
+                        if stop_now() {
+                            return None;
+                        }
+                        let mut sinks = [SplatSink::default(), SplatSink::default()];
+                        render_tile(scene, settings, tile, first, count, &mut sinks);
+                        tile.count_samples(first, count);
+                        tile.discarded += sinks[0].discarded + sinks[1].discarded;
                         progress.advance(tile.pixel_count() as u64 * count as u64);
-                        sink.splats
+                        let [a, b] = sinks;
+                        Some([a.splats, b.splats])
                     })
                     .collect()
             });
-            for splat in lists.iter().flatten() {
-                splat_sums[splat.pixel as usize] += splat.value.as_dvec3();
+            for (tile, list) in tiles.iter().zip(&lists) {
+                let Some(halves) = list else { continue };
+                for (h, splats) in halves.iter().enumerate() {
+                    for splat in splats {
+                        acc.splat_sums[h][splat.pixel as usize] += splat.value.as_dvec3();
+                    }
+                }
+                if splatting {
+                    let n = tile.pixel_count() as u64;
+                    let odd = (first..first + count).filter(|i| i % 2 == 1).count() as u64;
+                    acc.light_paths[1] += n * odd;
+                    acc.light_paths[0] += n * (count as u64 - odd);
+                }
             }
         }
-        stats.spp += count;
+        taken += count;
         stats.passes += 1;
-        if settings
-            .time_limit
-            .is_some_and(|limit| start.elapsed().as_secs_f32() >= limit)
+        stats.seconds = start.elapsed().as_secs_f64();
+        acc.stats(&mut stats);
+        stats.noise = acc.noise();
+        let reason = if interrupted() {
+            Some(StopReason::Interrupted)
+        } else if deadline.is_some_and(|d| start.elapsed() >= d) {
+            Some(StopReason::TimeLimit)
+        } else if options
+            .target_noise
+            .zip(stats.noise)
+            .is_some_and(|(target, noise)| noise < target)
         {
+            Some(StopReason::TargetNoise)
+        } else {
+            None
+        };
+        if let Some(reason) = reason {
+            stats.stopped_by = reason;
+        }
+        after_pass(&acc, &stats);
+        if reason.is_some() {
             break;
         }
     }
     progress.finish();
-
     stats.seconds = start.elapsed().as_secs_f64();
-    stats.samples = pixels * stats.spp as u64;
-    stats.discarded = tiles.iter().map(|t| t.discarded).sum();
-    let mut image = Image::new(width, height);
-    for tile in &tiles {
-        tile.resolve_into(&mut image, stats.spp);
-    }
-    if splatting {
-        let scale = 1.0 / stats.spp.max(1) as f64;
-        for (pixel, sum) in image.pixels.iter_mut().zip(&splat_sums) {
-            *pixel += (*sum * scale).as_vec3();
-        }
-    }
-    Ok((image, stats))
+    Ok((acc.image(), stats))
 }
 
 /// Adds samples `first .. first + count` to every pixel of `tile`, pushing
@@ -148,14 +354,16 @@ fn render_tile(
     tile: &mut Tile,
     first: u32,
     count: u32,
-    sink: &mut SplatSink,
+    sinks: &mut [SplatSink; 2],
 ) {
     let light_seed = s.seed ^ LIGHT_SEED_DOMAIN;
     let mut buffers = bdpt::BdptBuffers::default();
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
-            let mut sum = glam::DVec3::ZERO;
+            let mut sums = [DVec3::ZERO; 2];
             for index in first..first + count {
+                let half = (index % 2) as usize;
+                let sink = &mut sinks[half];
                 let index = index as u64;
                 let l: Rgb = match s.integrator {
                     IntegratorKind::Pt => {
@@ -186,12 +394,12 @@ fn render_tile(
                     }
                 };
                 if is_finite(l) {
-                    sum += l.as_dvec3();
+                    sums[half] += l.as_dvec3();
                 } else {
                     tile.discarded += 1;
                 }
             }
-            tile.add(x, y, sum);
+            tile.add(x, y, sums);
         }
     }
 }

@@ -42,7 +42,7 @@ pub fn render_strategies(scene: &Scene, options: &RenderOptions) -> Result<Vec<S
     let pool = worker_pool(options.threads)?;
     let (width, height) = (settings.width, settings.height);
     let pixels = width as usize * height as usize;
-    let mut tiles = tiles::split(width, height);
+    let mut tiles = tiles::split(super::Crop::full(width, height));
     let progress = Progress::new(options.progress, pixels as u64 * settings.spp as u64);
     let mut sums: BTreeMap<(u32, u32), Sums> = BTreeMap::new();
     let (mut spp, mut pass) = (0, 0);
@@ -53,13 +53,17 @@ pub fn render_strategies(scene: &Scene, options: &RenderOptions) -> Result<Vec<S
                 batch
                     .par_iter_mut()
                     .map(|tile| {
-                        let mut sink = SplatSink {
+                        let sink = || SplatSink {
                             strategies: Some(Vec::new()),
                             ..SplatSink::default()
                         };
-                        render_tile(scene, settings, tile, spp, count, &mut sink);
+                        let mut sinks = [sink(), sink()];
+                        render_tile(scene, settings, tile, spp, count, &mut sinks);
                         progress.advance(tile.pixel_count() as u64 * count as u64);
-                        sink.strategies.unwrap_or_default()
+                        let [a, b] = sinks;
+                        let mut records = a.strategies.unwrap_or_default();
+                        records.extend(b.strategies.unwrap_or_default());
+                        records
                     })
                     .collect()
             });

@@ -1,6 +1,11 @@
 //! Square tiles: the unit of parallel work, each owning its pixels' sums.
+//!
+//! A tile keeps two sums per pixel, of its even- and odd-numbered samples:
+//! two independent half images, whose difference estimates the noise
+//! (`--target-noise`). Tiles count their own samples, so a render stopped
+//! in the middle of a pass divides each pixel by the samples it received.
 
-use crate::film::Image;
+use super::Crop;
 use glam::DVec3;
 
 /// Small enough for many tiles per thread (load balance), large enough that
@@ -12,44 +17,71 @@ pub struct Tile {
     pub y0: u32,
     pub x1: u32,
     pub y1: u32,
-    /// Sum of the samples of each pixel, row-major within the tile.
-    sums: Vec<DVec3>,
+    /// Per half (even, odd sample indices), the sum of each pixel's
+    /// samples, row-major within the tile.
+    sums: [Vec<DVec3>; 2],
+    /// Samples each pixel of this tile has received, per half.
+    pub samples: [u32; 2],
     pub discarded: u64,
 }
 
 impl Tile {
     pub fn pixel_count(&self) -> usize {
-        self.sums.len()
+        self.sums[0].len()
     }
 
-    pub fn add(&mut self, x: u32, y: u32, value: DVec3) {
-        let w = self.x1 - self.x0;
-        self.sums[((y - self.y0) * w + (x - self.x0)) as usize] += value;
+    pub fn spp(&self) -> u32 {
+        self.samples[0] + self.samples[1]
     }
 
-    /// Writes the mean of `spp` samples per pixel into `image`.
-    pub fn resolve_into(&self, image: &mut Image, spp: u32) {
+    /// Adds one pixel's sums of a run of samples, split by half.
+    pub fn add(&mut self, x: u32, y: u32, halves: [DVec3; 2]) {
         let w = self.x1 - self.x0;
-        let scale = 1.0 / spp.max(1) as f64;
-        for (k, sum) in self.sums.iter().enumerate() {
-            let (x, y) = (self.x0 + k as u32 % w, self.y0 + k as u32 / w);
-            image.set(x, y, (*sum * scale).as_vec3());
-        }
+        let k = ((y - self.y0) * w + (x - self.x0)) as usize;
+        self.sums[0][k] += halves[0];
+        self.sums[1][k] += halves[1];
+    }
+
+    /// Records that samples `first .. first + count` were added to every pixel.
+    pub fn count_samples(&mut self, first: u32, count: u32) {
+        let odd = (first..first + count).filter(|i| i % 2 == 1).count() as u32;
+        self.samples[1] += odd;
+        self.samples[0] += count - odd;
+    }
+
+    /// Each pixel's sum over `halves` (both, or one), with (x, y) in image
+    /// coordinates, and the number of samples that sum holds.
+    pub fn pixels<'a>(
+        &'a self,
+        halves: &'a [usize],
+    ) -> impl Iterator<Item = (u32, u32, DVec3)> + 'a {
+        let w = self.x1 - self.x0;
+        (0..self.pixel_count()).map(move |k| {
+            let sum = halves.iter().map(|&h| self.sums[h][k]).sum();
+            (self.x0 + k as u32 % w, self.y0 + k as u32 / w, sum)
+        })
+    }
+
+    pub fn samples_in(&self, halves: &[usize]) -> u32 {
+        halves.iter().map(|&h| self.samples[h]).sum()
     }
 }
 
-/// Covers a `width` × `height` image with tiles, in scanline order.
-pub fn split(width: u32, height: u32) -> Vec<Tile> {
+/// Covers `area` with tiles, in scanline order. Tiles start on multiples of
+/// [`TILE_SIZE`] relative to the area's corner.
+pub fn split(area: Crop) -> Vec<Tile> {
     let mut tiles = Vec::new();
-    for y0 in (0..height).step_by(TILE_SIZE as usize) {
-        for x0 in (0..width).step_by(TILE_SIZE as usize) {
-            let (x1, y1) = ((x0 + TILE_SIZE).min(width), (y0 + TILE_SIZE).min(height));
+    for y0 in (area.y0..area.y1).step_by(TILE_SIZE as usize) {
+        for x0 in (area.x0..area.x1).step_by(TILE_SIZE as usize) {
+            let (x1, y1) = ((x0 + TILE_SIZE).min(area.x1), (y0 + TILE_SIZE).min(area.y1));
+            let n = ((x1 - x0) * (y1 - y0)) as usize;
             tiles.push(Tile {
                 x0,
                 y0,
                 x1,
                 y1,
-                sums: vec![DVec3::ZERO; ((x1 - x0) * (y1 - y0)) as usize],
+                sums: [vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]],
+                samples: [0, 0],
                 discarded: 0,
             });
         }

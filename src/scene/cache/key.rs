@@ -26,6 +26,27 @@ pub fn scene_key(desc: &SceneDesc, build: &BuildOptions) -> Option<Key> {
     h.update(&FORMAT_VERSION.to_le_bytes());
     h.update(env!("CARGO_PKG_VERSION").as_bytes());
     h.update(&executable_stamp());
+    hash_geometry_inputs(&mut h, desc, build)?;
+    Some(*h.finalize().as_bytes())
+}
+
+/// A hash of what a scene renders: its geometry inputs as in the cache key,
+/// its camera and its lights — but not the executable, so renders of the
+/// same scene by separately built copies of `tracer` (on several machines)
+/// can be merged. Textures are named by path, not hashed.
+pub fn scene_hash(desc: &SceneDesc) -> Option<Key> {
+    let mut h = blake3::Hasher::new();
+    h.update(b"tracer scene hash\0");
+    hash_geometry_inputs(&mut h, desc, &BuildOptions::default())?;
+    h.update(format!("{:?}|{:?}", desc.camera, desc.lights).as_bytes());
+    Some(*h.finalize().as_bytes())
+}
+
+fn hash_geometry_inputs(
+    h: &mut blake3::Hasher,
+    desc: &SceneDesc,
+    build: &BuildOptions,
+) -> Option<()> {
     // Debug output is exact for every field involved (floats print as the
     // shortest string that reads back to the same value) and names every
     // variant, so equal text means equal descriptions.
@@ -34,10 +55,10 @@ pub fn scene_key(desc: &SceneDesc, build: &BuildOptions) -> Option<Key> {
     for object in &desc.objects {
         h.update(format!("{object:?}\0").as_bytes());
         if let ShapeDesc::Mesh { file, .. } = &object.shape {
-            hash_mesh_file(&mut h, file).ok()?;
+            hash_mesh_file(h, file).ok()?;
         }
     }
-    Some(*h.finalize().as_bytes())
+    Some(())
 }
 
 /// The executable's size and modification time: a stand-in for its

@@ -14,7 +14,7 @@
 pub mod entry;
 pub mod key;
 
-pub use key::{scene_key, Key};
+pub use key::{scene_hash, scene_key, Key};
 
 use super::{Emitter, Geometry, MtlRecord, TriangleShading, NO_LIGHT};
 use crate::bvh::wide::BuildReport;

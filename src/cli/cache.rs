@@ -1,0 +1,116 @@
+//! `tracer cache`: list, clear and prune the scene cache; the cache flags
+//! of `render` and `info`.
+
+use crate::scene::cache::Cache;
+use crate::{Error, Result};
+use clap::{Args, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Subcommand, Debug)]
+pub enum CacheCommand {
+    /// One line per entry: key, scene, size, time since last use.
+    List,
+    /// Remove every entry.
+    Clear,
+    /// Remove least recently used entries until the rest fit in a size.
+    Prune {
+        /// e.g. 2G, 500M (binary multiples).
+        #[arg(long, value_parser = crate::scene::cache::parse_size)]
+        max_size: u64,
+    },
+}
+
+/// Where prepared geometry is cached between runs.
+#[derive(Args, Debug, Default, Clone)]
+pub struct CacheArgs {
+    /// The scene cache folder (default: $TRACER_CACHE_DIR, else the
+    /// platform's cache folder, ~/.cache/tracer on Linux).
+    #[arg(long, value_name = "DIR")]
+    pub cache_dir: Option<PathBuf>,
+    /// Neither read nor write the scene cache.
+    #[arg(long, conflicts_with = "cache_dir")]
+    pub no_cache: bool,
+}
+
+impl CacheArgs {
+    pub fn cache(&self) -> Option<Cache> {
+        if self.no_cache {
+            return None;
+        }
+        self.cache_dir
+            .clone()
+            .or_else(Cache::default_dir)
+            .map(Cache::new)
+    }
+}
+
+pub fn run_cache(action: &CacheCommand, dir: Option<PathBuf>) -> Result<()> {
+    let dir = dir.or_else(Cache::default_dir).ok_or_else(|| {
+        Error::Unsupported("no cache folder: pass --cache-dir or set TRACER_CACHE_DIR".into())
+    })?;
+    let cache = Cache::new(&dir);
+    let io = |e| Error::io(&dir, e);
+    match action {
+        CacheCommand::List => {
+            let entries = cache.list().map_err(io)?;
+            println!("{:<16}  {:>10}  {:>10}  scene", "key", "size", "last used");
+            for e in &entries {
+                let age = e.last_used.elapsed().unwrap_or_default();
+                let scene = match &e.scene {
+                    Ok(s) => s.clone(),
+                    Err(why) => format!("(invalid: {why})"),
+                };
+                println!(
+                    "{:<16}  {:>10}  {:>10}  {scene}",
+                    &e.key[..e.key.len().min(16)],
+                    human_bytes(e.bytes),
+                    human_age(age)
+                );
+            }
+            let total: u64 = entries.iter().map(|e| e.bytes).sum();
+            println!(
+                "{} entries, {} in {}",
+                entries.len(),
+                human_bytes(total),
+                dir.display()
+            );
+        }
+        CacheCommand::Clear => {
+            let (n, bytes) = cache.clear().map_err(io)?;
+            println!("removed {n} files ({})", human_bytes(bytes));
+        }
+        CacheCommand::Prune { max_size } => {
+            let (n, bytes) = cache.prune(*max_size).map_err(io)?;
+            println!(
+                "removed {n} entries ({}), least recently used first",
+                human_bytes(bytes)
+            );
+        }
+    }
+    Ok(())
+}
+
+fn human_bytes(n: u64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut x = n as f64;
+    let mut unit = 0;
+    while x >= 1024.0 && unit < UNITS.len() - 1 {
+        x /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{n} B")
+    } else {
+        format!("{x:.1} {}", UNITS[unit])
+    }
+}
+
+fn human_age(d: std::time::Duration) -> String {
+    let s = d.as_secs();
+    match s {
+        0..60 => format!("{s} s ago"),
+        60..3600 => format!("{} min ago", s / 60),
+        3600..86400 => format!("{} h ago", s / 3600),
+        _ => format!("{} d ago", s / 86400),
+    }
+}
