@@ -10,8 +10,10 @@ use std::ops::{Deref, DerefMut};
 use std::sync::Arc;
 
 pub struct PodArray<T: Pod> {
-    /// Points into `owner`; cached so that indexing costs what a `Vec`'s does.
-    ptr: *const T,
+    /// Points into `owner`; cached so that indexing costs what a `Vec`'s
+    /// does. Taken once, mutably, from the vector, and the only way its
+    /// records are reached afterwards.
+    ptr: *mut T,
     len: usize,
     owner: Owner<T>,
 }
@@ -37,7 +39,8 @@ impl<T: Pod> PodArray<T> {
         let section = map.get(offset..end)?;
         let records: &[T] = bytemuck::try_cast_slice(section).ok()?;
         Some(PodArray {
-            ptr: records.as_ptr(),
+            // Only ever read: `deref_mut` copies a mapped array first.
+            ptr: records.as_ptr().cast_mut(),
             len,
             owner: Owner::Map(map.clone()),
         })
@@ -57,9 +60,9 @@ impl<T: Pod> PodArray<T> {
 }
 
 impl<T: Pod> From<Vec<T>> for PodArray<T> {
-    fn from(v: Vec<T>) -> Self {
+    fn from(mut v: Vec<T>) -> Self {
         PodArray {
-            ptr: v.as_ptr(),
+            ptr: v.as_mut_ptr(),
             len: v.len(),
             owner: Owner::Vec(v),
         }
@@ -89,10 +92,9 @@ impl<T: Pod> DerefMut for PodArray<T> {
         if let Owner::Map(_) = self.owner {
             *self = PodArray::from(self.deref().to_vec());
         }
-        match &mut self.owner {
-            Owner::Vec(v) => v,
-            Owner::Map(_) => unreachable!("just made owned"),
-        }
+        // SAFETY: the array now owns its vector, which `ptr` was taken from
+        // mutably and which is never touched through `owner` again.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr, self.len) }
     }
 }
 

@@ -309,6 +309,38 @@ fn the_key_changes_with_everything_that_shapes_the_geometry() {
     let text = std::fs::read_to_string(&scene_path).unwrap();
     std::fs::write(&scene_path, text.replace("[2, 2, 2]", "[2, 2, 3]")).unwrap();
     changed("an emission", &mut keys);
+    // A scene material named "default" (it replaces the built-in one).
+    let text = std::fs::read_to_string(&scene_path).unwrap();
+    let with_default = text.replacen(
+        "\"objects\"",
+        "\"materials\": {\"default\": {\"type\": \"diffuse\", \"albedo\": [0.2, 0.3, 0.4]}},\n      \"objects\"",
+        1,
+    );
+    std::fs::write(&scene_path, with_default).unwrap();
+    changed("a default material", &mut keys);
+    // An indented `mtllib` line still names the MTL file (tobj reads it).
+    let text = std::fs::read_to_string(&obj).unwrap();
+    std::fs::write(
+        &obj,
+        text.replacen("mtllib grid.mtl", "\t mtllib grid.mtl", 1),
+    )
+    .unwrap();
+    changed("indenting mtllib", &mut keys);
+    let text = std::fs::read_to_string(&mtl).unwrap();
+    std::fs::write(&mtl, text.replace("Kd 0.7", "Kd 0.6")).unwrap();
+    changed("an MTL byte behind an indented mtllib", &mut keys);
+    // The MTL file going missing.
+    std::fs::remove_file(&mtl).unwrap();
+    changed("a missing MTL file", &mut keys);
+    // T-racer's material override of a mesh.
+    let mut desc = scene::parse_file(&scene_path).unwrap();
+    let plain = scene_key(&desc, &BuildOptions::default()).unwrap();
+    let tracer::scene::desc::ShapeDesc::Mesh { mtl_override, .. } = &mut desc.objects[0].shape
+    else {
+        panic!("object 0 is the mesh")
+    };
+    *mtl_override = Some(tracer::scene::desc::MaterialOverride::Mirror);
+    assert_ne!(scene_key(&desc, &BuildOptions::default()).unwrap(), plain);
     // The BVH build parameters.
     let desc = scene::parse_file(&scene_path).unwrap();
     let other = BuildOptions {
@@ -357,6 +389,43 @@ fn concurrent_writers_leave_one_whole_entry() {
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
     assert_eq!(load(&scene_path, &cache).report.cache, CacheUse::Hit);
+}
+
+#[test]
+fn concurrent_processes_leave_one_whole_entry() {
+    let dir = tempfile::tempdir().unwrap();
+    // Large enough for the command line's default threshold.
+    let scene_path = write_mesh(dir.path(), 80);
+    let cache_dir = dir.path().join("cache");
+    let children: Vec<_> = (0..4)
+        .map(|k| {
+            Command::new(env!("CARGO_BIN_EXE_tracer"))
+                .arg("render")
+                .arg(&scene_path)
+                .args(["-q", "--threads", "1", "--cache-dir"])
+                .arg(&cache_dir)
+                .arg("-o")
+                .arg(dir.path().join(format!("out{k}.pfm")))
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for child in children {
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert!(!stderr.contains("warning"), "{stderr}");
+    }
+    let images: Vec<_> = (0..4)
+        .map(|k| tracer::film::write::read_pfm(&dir.path().join(format!("out{k}.pfm"))).unwrap())
+        .collect();
+    assert!(images.iter().all(|i| *i == images[0]));
+    let cache = Cache::new(&cache_dir);
+    the_entry(&cache);
+    assert_eq!(load(&scene_path, &cache).report.cache, CacheUse::Hit);
+    let leftovers = std::fs::read_dir(&cache_dir).unwrap().count();
+    assert_eq!(leftovers, 1, "temporary files left behind");
 }
 
 #[test]
@@ -428,15 +497,19 @@ fn cache_list_clear_and_prune_from_the_command_line() {
     };
     assert!(render(&scenes[0]).contains("cached"));
     assert!(render(&scenes[0]).contains("from the scene cache"));
-    std::thread::sleep(std::time::Duration::from_millis(20));
     render(&scenes[1]);
 
     let list = tracer(&["cache", "list"], &cache_dir);
     assert!(list.contains("2 entries"), "{list}");
-    assert!(list.contains("s0") && list.contains("s1"), "{list}");
+    assert!(list.contains("/s0/") && list.contains("/s1/"), "{list}");
 
-    // Use s0 again: s1 is now the least recently used, and goes first.
-    std::thread::sleep(std::time::Duration::from_millis(20));
+    // Make s1 the older entry by its clock, whatever the file system's
+    // timestamp resolution; then use s0 again, which refreshes its time.
+    for e in Cache::new(&cache_dir).list().unwrap() {
+        let f = std::fs::File::options().append(true).open(&e.path).unwrap();
+        let age = std::time::Duration::from_secs(3600);
+        f.set_modified(std::time::SystemTime::now() - age).unwrap();
+    }
     render(&scenes[0]);
     let sizes: Vec<u64> = Cache::new(&cache_dir)
         .list()
@@ -449,7 +522,7 @@ fn cache_list_clear_and_prune_from_the_command_line() {
     assert!(pruned.contains("removed 1 entries"), "{pruned}");
     let left = Cache::new(&cache_dir).list().unwrap();
     assert_eq!(left.len(), 1);
-    assert!(left[0].scene.as_ref().unwrap().contains("s0"), "{left:?}");
+    assert!(left[0].scene.as_ref().unwrap().contains("/s0/"), "{left:?}");
 
     let cleared = tracer(&["cache", "clear"], &cache_dir);
     assert!(cleared.contains("removed 1 files"), "{cleared}");
@@ -465,4 +538,35 @@ fn sizes_parse_with_binary_units() {
     assert_eq!(parse_size("4096").unwrap(), 4096);
     assert!(parse_size("lots").is_err());
     assert!(parse_size("3X").is_err());
+}
+
+#[test]
+fn an_mtllib_line_across_read_chunks_is_still_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = write_mesh(dir.path(), 4);
+    let obj = dir.path().join("grid.obj");
+    let text = std::fs::read_to_string(&obj).unwrap();
+    // Pad with comments so the mtllib line starts 3 bytes before the
+    // hasher's 1 MiB chunk boundary.
+    let body = text.replacen("mtllib grid.mtl\n", "", 1);
+    let pad = (1 << 20) - 3 - 2;
+    let padded = format!("#{}\n", "x".repeat(pad - 1)) + "mtllib grid.mtl\n" + &body;
+    assert_eq!(padded.find("mtllib"), Some((1 << 20) - 4));
+    std::fs::write(&obj, padded).unwrap();
+    let key = || {
+        scene_key(
+            &scene::parse_file(&scene_path).unwrap(),
+            &BuildOptions::default(),
+        )
+        .unwrap()
+    };
+    let before = key();
+    let mtl = dir.path().join("grid.mtl");
+    let text = std::fs::read_to_string(&mtl).unwrap();
+    std::fs::write(&mtl, text.replace("Kd 0.7", "Kd 0.6")).unwrap();
+    assert_ne!(
+        key(),
+        before,
+        "the MTL behind a split mtllib line was not hashed"
+    );
 }

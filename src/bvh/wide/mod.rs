@@ -133,19 +133,19 @@ impl WideBvh {
             }
             if reference & LEAF_BIT != 0 {
                 let block = (reference & LEAF_INDEX_MASK) as usize;
-                return match blocks.get(block) {
-                    None => Err(format!("leaf block {block} of {}", blocks.len())),
-                    Some(b)
-                        if b.id
-                            .iter()
-                            .any(|&id| id != u32::MAX && id as usize >= triangle_count) =>
-                    {
-                        Err(format!(
-                            "leaf block {block} names a triangle beyond {triangle_count}"
-                        ))
-                    }
-                    Some(_) => Ok(()),
+                let count = ((reference >> LEAF_COUNT_SHIFT) & 3) as usize + 1;
+                let Some(b) = blocks.get(block) else {
+                    return Err(format!("leaf block {block} of {}", blocks.len()));
                 };
+                if b.id[..count]
+                    .iter()
+                    .any(|&id| id as usize >= triangle_count)
+                {
+                    return Err(format!(
+                        "leaf block {block} names a triangle beyond {triangle_count}"
+                    ));
+                }
+                return Ok(());
             }
             let node = reference as usize;
             if node >= nodes.len() || parent.is_some_and(|p| node <= p) {
@@ -157,9 +157,22 @@ impl WideBvh {
         if nodes.is_empty() != (root == EMPTY_CHILD || root & LEAF_BIT != 0) {
             return Err("the root does not match the node count".into());
         }
+        // Children come after their parents, so one forward pass knows
+        // every node's depth; traversal's stack holds three entries a level.
+        let mut depth = vec![0u32; nodes.len()];
         for (i, node) in nodes.iter().enumerate() {
-            for &child in &node.children {
+            for (lane, &child) in node.children.iter().enumerate() {
                 check(child, Some(i))?;
+                let b = &node.bounds;
+                if child == EMPTY_CHILD && (0..3).any(|a| b[a][lane] <= b[3 + a][lane]) {
+                    return Err(format!("node {i} has an empty slot that rays can enter"));
+                }
+                if child != EMPTY_CHILD && child & LEAF_BIT == 0 {
+                    depth[child as usize] = depth[i] + 1;
+                }
+            }
+            if depth[i] as usize > traverse::MAX_DEPTH {
+                return Err(format!("deeper than {} levels", traverse::MAX_DEPTH));
             }
         }
         Ok(WideBvh {

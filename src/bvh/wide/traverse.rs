@@ -23,9 +23,11 @@ pub(super) fn leaf(reference: u32) -> (usize, u32) {
     )
 }
 
-/// Each node visit pushes at most three children, and the depth is bounded
-/// by the binary builder's (64 SAH levels plus a median tail of at most 32).
-const STACK_SIZE: usize = 3 * 96 + 4;
+/// The deepest tree the traversal stack holds: each node visit pushes at
+/// most three children, and the builder's trees are at most 96 deep (64 SAH
+/// levels plus a median tail of at most 32).
+pub(super) const MAX_DEPTH: usize = 96;
+const STACK_SIZE: usize = 3 * MAX_DEPTH + 4;
 
 /// The traversal stack, left uninitialised: zeroing two kilobytes on every
 /// ray cost more than the traversal itself in small scenes.

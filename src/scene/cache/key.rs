@@ -2,14 +2,14 @@
 //! prepared geometry, so an entry can only be found by a scene that would
 //! build exactly the same triangles and BVH.
 //!
-//! Hashed, in order: the cache format version, the crate version and the
-//! running executable's size and modification time (a rebuilt renderer may
-//! build a different BVH from the same scene), the BVH build parameters,
-//! the scene's materials and objects (shapes, transforms, material names,
-//! emission), and the bytes of every mesh file and of the MTL files those
-//! meshes name. Files are memory-mapped and hashed in place: hashing reads
-//! each byte once, at several GB/s, where parsing the same OBJ runs at tens
-//! of MB/s.
+//! Hashed, in order: the cache format version, the crate version and a
+//! hash of the renderer's own source, lock file and target features taken
+//! at build time (a changed renderer may build a different BVH from the
+//! same scene), the BVH build parameters, the scene's materials and objects
+//! (shapes, transforms, material names, emission), and the bytes of every
+//! mesh file and of the MTL files those meshes name. Files are read in
+//! large chunks and hashed as they stream by, at several GB/s, where
+//! parsing the same OBJ runs at tens of MB/s.
 
 use super::entry::FORMAT_VERSION;
 use crate::bvh::BuildOptions;
@@ -25,7 +25,7 @@ pub fn scene_key(desc: &SceneDesc, build: &BuildOptions) -> Option<Key> {
     h.update(b"tracer scene cache\0");
     h.update(&FORMAT_VERSION.to_le_bytes());
     h.update(env!("CARGO_PKG_VERSION").as_bytes());
-    h.update(&executable_stamp());
+    h.update(env!("TRACER_SOURCE_HASH").as_bytes());
     hash_geometry_inputs(&mut h, desc, build)?;
     Some(*h.finalize().as_bytes())
 }
@@ -61,77 +61,85 @@ fn hash_geometry_inputs(
     Some(())
 }
 
-/// The executable's size and modification time: a stand-in for its
-/// contents that costs one `stat`.
-fn executable_stamp() -> Vec<u8> {
-    let meta = std::env::current_exe().and_then(std::fs::metadata);
-    match meta {
-        Ok(m) => {
-            let modified = m
-                .modified()
-                .ok()
-                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
-                .map_or(0, |d| d.as_nanos());
-            [m.len().to_le_bytes().as_slice(), &modified.to_le_bytes()].concat()
-        }
-        Err(_) => b"unknown executable".to_vec(),
-    }
-}
-
 /// Hashes an OBJ file and the MTL files its `mtllib` lines name.
 fn hash_mesh_file(h: &mut blake3::Hasher, path: &Path) -> std::io::Result<()> {
-    let bytes = map(path)?;
-    let bytes: &[u8] = bytes.as_deref().unwrap_or(&[]);
-    h.update(&(bytes.len() as u64).to_le_bytes());
-    hash_bytes(h, bytes);
+    let mut names = Vec::new();
+    let length = hash_file(h, path, Some(&mut names))?;
+    h.update(&length.to_le_bytes());
     let folder = path.parent().unwrap_or(Path::new("."));
-    for name in mtllib_names(bytes) {
+    for name in names {
         h.update(name.as_bytes());
-        match map(&folder.join(&name)) {
-            Ok(mtl) => {
-                let mtl: &[u8] = mtl.as_deref().unwrap_or(&[]);
-                h.update(&(mtl.len() as u64).to_le_bytes());
-                h.update(mtl);
-            }
+        let mut mtl = blake3::Hasher::new();
+        match hash_file(&mut mtl, &folder.join(&name), None) {
+            Ok(_) => h.update(mtl.finalize().as_bytes()),
             // A missing MTL file is part of the input too (tobj then
             // warns and the default material is used).
-            Err(_) => {
-                h.update(b"\0missing");
-            }
-        }
+            Err(_) => h.update(b"\0missing"),
+        };
     }
     Ok(())
 }
 
-/// The file's bytes, mapped; `None` for an empty file (which cannot be mapped).
-fn map(path: &Path) -> std::io::Result<Option<memmap2::Mmap>> {
-    let file = std::fs::File::open(path)?;
-    if file.metadata()?.len() == 0 {
-        return Ok(None);
+/// Streams `path` into `h`, collecting `mtllib` names when asked; returns
+/// the byte count. Read, not mapped: a file truncated by another program
+/// while it is hashed gives a wrong key (a miss), not a crash.
+fn hash_file(
+    h: &mut blake3::Hasher,
+    path: &Path,
+    mut names: Option<&mut Vec<String>>,
+) -> std::io::Result<u64> {
+    use std::io::Read;
+    let mut file = std::fs::File::open(path)?;
+    let mut buffer = vec![0u8; 1 << 20];
+    // The last, unfinished line of the previous chunk.
+    let mut carry: Vec<u8> = Vec::new();
+    let mut length = 0u64;
+    loop {
+        let n = match file.read(&mut buffer) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        let chunk = &buffer[..n];
+        h.update(chunk);
+        length += n as u64;
+        if let Some(names) = names.as_deref_mut() {
+            match (memchr::memchr(b'\n', chunk), memchr::memrchr(b'\n', chunk)) {
+                (Some(first), Some(last)) => {
+                    carry.extend_from_slice(&chunk[..=first]);
+                    names.extend(mtllib_names(&carry));
+                    names.extend(mtllib_names(&chunk[first + 1..=last]));
+                    carry.clear();
+                    carry.extend_from_slice(&chunk[last + 1..]);
+                }
+                _ => carry.extend_from_slice(chunk),
+            }
+        }
     }
-    // SAFETY: the map is read once, here; a file changed while it is hashed
-    // gives a key that matches neither version, which only costs a miss.
-    unsafe { memmap2::Mmap::map(&file) }.map(Some)
+    if let Some(names) = names {
+        names.extend(mtllib_names(&carry));
+    }
+    Ok(length)
 }
 
-fn hash_bytes(h: &mut blake3::Hasher, bytes: &[u8]) {
-    if bytes.len() >= 1 << 20 {
-        h.update_rayon(bytes);
-    } else {
-        h.update(bytes);
-    }
-}
-
-/// The names on an OBJ's `mtllib` lines: the whole rest of the line (as tobj
-/// reads it) and, when it has several words, each word.
-pub fn mtllib_names(obj: &[u8]) -> Vec<String> {
+/// The names on the `mtllib` lines of whole lines of an OBJ file: the rest
+/// of the line, trimmed (as tobj reads it), and, when it has several words,
+/// each word. Like tobj, leading blanks before `mtllib` are allowed.
+pub fn mtllib_names(lines: &[u8]) -> Vec<String> {
     let mut names = Vec::new();
-    for start in memchr::memmem::find_iter(obj, b"mtllib") {
-        let at_line_start = start == 0 || matches!(obj[start - 1], b'\n' | b'\r');
-        if !at_line_start {
+    for start in memchr::memmem::find_iter(lines, b"mtllib") {
+        let line_start = memchr::memrchr2(b'\n', b'\r', &lines[..start]).map_or(0, |i| i + 1);
+        if !lines[line_start..start]
+            .iter()
+            .all(|b| matches!(b, b' ' | b'\t'))
+        {
             continue;
         }
-        let rest = &obj[start + 6..];
+        let rest = &lines[start + 6..];
+        if !rest.first().is_some_and(|b| matches!(b, b' ' | b'\t')) {
+            continue;
+        }
         let end = memchr::memchr2(b'\n', b'\r', rest).unwrap_or(rest.len());
         let line = String::from_utf8_lossy(&rest[..end]);
         let line = line.trim();

@@ -28,15 +28,16 @@ use entry::{Invalid, Section, SectionReader};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, SystemTime};
 
 const EXTENSION: &str = "tcache";
 /// Scenes smaller than this load faster than an entry would: not stored.
 pub const DEFAULT_MIN_TRIANGLES: usize = 10_000;
+/// The cache's size limit unless `$TRACER_CACHE_MAX_SIZE` says otherwise.
+pub const DEFAULT_MAX_SIZE: u64 = 20 << 30;
 
 /// What the cache did for one load.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -126,8 +127,23 @@ impl Cache {
                 }
                 Some(g)
             }
+            // The entry may be sound; this process just cannot read it now
+            // (out of file handles, say). Leave it be.
+            Err(Invalid::Io(e)) => {
+                warnings.push(format!(
+                    "cache entry {} cannot be read ({e}); rebuilding without it",
+                    path.display()
+                ));
+                None
+            }
             Err(reason) => {
-                let removed = if meta.is_dir() {
+                // Another render may have just renamed a sound entry into
+                // place: only remove the very file that was found bad.
+                let still_there =
+                    std::fs::symlink_metadata(&path).is_ok_and(|now| same_file(&now, &meta));
+                let removed = if !still_there {
+                    Ok(())
+                } else if meta.is_dir() {
                     std::fs::remove_dir_all(&path)
                 } else {
                     std::fs::remove_file(&path)
@@ -157,8 +173,18 @@ impl Cache {
         if geometry.triangles.len() < self.min_triangles {
             return CacheUse::NotStored;
         }
-        match self.write_entry(key, geometry, scene_file) {
-            Ok(()) => CacheUse::Stored,
+        let meta = Meta::of(geometry, scene_file);
+        if !meta.is_finite() {
+            // JSON has no infinities: such an entry could never be read back.
+            return CacheUse::NotStored;
+        }
+        match self.write_entry(key, geometry, &meta) {
+            Ok(()) => {
+                if let Some(max) = max_size_from_env() {
+                    let _ = self.prune(max);
+                }
+                CacheUse::Stored
+            }
             Err(e) => {
                 warnings.push(format!(
                     "cannot write to the scene cache in {} ({e}); continuing without it",
@@ -169,9 +195,9 @@ impl Cache {
         }
     }
 
-    fn write_entry(&self, key: &Key, g: &Geometry, scene_file: &Path) -> std::io::Result<()> {
+    fn write_entry(&self, key: &Key, g: &Geometry, meta: &Meta) -> std::io::Result<()> {
         std::fs::create_dir_all(&self.dir)?;
-        let meta = serde_json::to_vec(&Meta::of(g, scene_file)).map_err(std::io::Error::other)?;
+        let meta = serde_json::to_vec(meta).map_err(std::io::Error::other)?;
         let emitters: Vec<EmitterRecord> = g.emitters.iter().map(EmitterRecord::from).collect();
         let sections = [
             Section::of(SECTION_META, &meta),
@@ -181,21 +207,19 @@ impl Cache {
             Section::of(SECTION_NODES, g.bvh.nodes()),
             Section::of(SECTION_BLOCKS, g.bvh.blocks()),
         ];
-        let target = self.entry_path(key);
-        let temp = self.dir.join(temp_name(key));
-        let written = (|| {
-            let file = File::create(&temp)?;
-            let mut out = BufWriter::with_capacity(1 << 20, file);
-            entry::write(&mut out, key, &sections)?;
-            out.flush()?;
-            out.get_ref().sync_all()?;
-            drop(out);
-            std::fs::rename(&temp, &target)
-        })();
-        if written.is_err() {
-            let _ = std::fs::remove_file(&temp);
-        }
-        written
+        // A fresh, exclusively created name (random, so writers on other
+        // machines sharing the folder cannot collide either); removed if
+        // anything below fails.
+        let temp = tempfile::Builder::new()
+            .prefix(&format!(".{}.", hex(key)))
+            .suffix(".tmp")
+            .tempfile_in(&self.dir)?;
+        let mut out = BufWriter::with_capacity(1 << 20, temp);
+        entry::write(&mut out, key, &sections)?;
+        let temp = out.into_inner().map_err(|e| e.into_error())?;
+        temp.as_file().sync_all()?;
+        temp.persist(self.entry_path(key)).map_err(|e| e.error)?;
+        Ok(())
     }
 
     /// Every entry, least recently used first; temporary files are skipped.
@@ -212,7 +236,12 @@ impl Cache {
             if path.extension().and_then(|e| e.to_str()) != Some(EXTENSION) {
                 continue;
             }
-            let meta = item.metadata()?;
+            // Another process may remove entries while we look.
+            let meta = match item.metadata() {
+                Ok(m) => m,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) => return Err(e),
+            };
             entries.push(EntryInfo {
                 key: path
                     .file_stem()
@@ -262,7 +291,12 @@ impl Cache {
             if total <= max_bytes {
                 break;
             }
-            if std::fs::remove_file(&e.path).is_ok() {
+            let gone = if e.path.is_dir() {
+                std::fs::remove_dir_all(&e.path)
+            } else {
+                std::fs::remove_file(&e.path)
+            };
+            if gone.is_ok() {
                 total -= e.bytes;
                 removed.0 += 1;
                 removed.1 += e.bytes;
@@ -272,11 +306,28 @@ impl Cache {
     }
 }
 
-/// A name no other writer uses at the same moment: process id and a counter.
-fn temp_name(key: &Key) -> String {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    format!(".{}.{}-{n}.tmp", hex(key), std::process::id())
+/// `$TRACER_CACHE_MAX_SIZE` (e.g. `20G`), else 20 GiB: after each store the
+/// least recently used entries beyond it are removed. `0` or `none` turns
+/// the limit off.
+fn max_size_from_env() -> Option<u64> {
+    match std::env::var("TRACER_CACHE_MAX_SIZE") {
+        Ok(v) if v == "0" || v.eq_ignore_ascii_case("none") => None,
+        Ok(v) => parse_size(&v).ok(),
+        Err(_) => Some(DEFAULT_MAX_SIZE),
+    }
+}
+
+/// Whether two metadata describe the same file (not merely the same name).
+fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        a.dev() == b.dev() && a.ino() == b.ino()
+    }
+    #[cfg(not(unix))]
+    {
+        a.len() == b.len() && a.modified().ok() == b.modified().ok()
+    }
 }
 
 /// A temporary file more than an hour old: its writer is gone.
@@ -353,6 +404,23 @@ enum MaterialJson {
 }
 
 impl Meta {
+    fn is_finite(&self) -> bool {
+        let finite = |v: &[f32]| v.iter().all(|x| x.is_finite());
+        finite(&[self.bvh_sah_cost, self.bvh_binary_sah_cost])
+            && self.bvh_bounds.iter().all(|b| finite(b))
+            && self.mtl_materials.iter().all(|m| {
+                finite(&m.kd)
+                    && match &m.material {
+                        MaterialJson::Diffuse { albedo } => finite(albedo),
+                        MaterialJson::DiffuseTexture { .. } => true,
+                        MaterialJson::Mirror { reflectance } => finite(reflectance),
+                        MaterialJson::Dielectric { ior, transmittance } => {
+                            ior.is_finite() && finite(transmittance)
+                        }
+                    }
+            })
+    }
+
     fn of(g: &Geometry, scene_file: &Path) -> Meta {
         let r = g.bvh.report();
         let b = g.bvh.bounds();
@@ -420,7 +488,10 @@ fn mtl_record(m: MtlJson) -> MtlRecord {
     }
 }
 
-fn open_entry(path: &Path) -> Result<(Arc<memmap2::Mmap>, entry::Header), Invalid> {
+/// Maps an entry and reads its header. `populate` faults every page in at
+/// once, which a full read needs anyway; a listing only touches the
+/// header and metadata.
+fn open_entry(path: &Path, populate: bool) -> Result<(Arc<memmap2::Mmap>, entry::Header), Invalid> {
     let file = File::open(path)?;
     if file.metadata()?.len() == 0 {
         return Err(Invalid::Length("empty file".into()));
@@ -428,16 +499,19 @@ fn open_entry(path: &Path) -> Result<(Arc<memmap2::Mmap>, entry::Header), Invali
     // SAFETY: entries are never modified in place: writers create a new
     // file and rename it over the old one, which leaves this mapping's file
     // intact. (Truncating an entry by hand while a render maps it would
-    // crash that render, as with any mapped file.) Populating faults every
-    // page in at once, which the checksum needs anyway.
-    let map = unsafe { memmap2::MmapOptions::new().populate().map(&file)? };
+    // crash that render, as with any mapped file.)
+    let mut options = memmap2::MmapOptions::new();
+    if populate {
+        options.populate();
+    }
+    let map = unsafe { options.map(&file)? };
     let map = Arc::new(map);
     let header = entry::read_header(&map)?;
     Ok((map, header))
 }
 
 fn read_scene_name(path: &Path) -> Result<String, Invalid> {
-    let (map, header) = open_entry(path)?;
+    let (map, header) = open_entry(path, false)?;
     let mut sections = SectionReader::new(&map, &header);
     let meta: Meta = serde_json::from_slice(&sections.take::<u8>(SECTION_META)?)
         .map_err(|e| Invalid::Malformed(format!("metadata: {e}")))?;
@@ -445,7 +519,7 @@ fn read_scene_name(path: &Path) -> Result<String, Invalid> {
 }
 
 fn read_entry(path: &Path, key: &Key, scene_materials: usize) -> Result<Geometry, Invalid> {
-    let (map, header) = open_entry(path)?;
+    let (map, header) = open_entry(path, true)?;
     if header.key != *key {
         return Err(Invalid::Key);
     }
