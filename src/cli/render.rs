@@ -192,7 +192,14 @@ fn interrupt_flag() -> Arc<AtomicBool> {
     flag
 }
 
-fn metadata(scene: &Scene, hash: &str, args: &RenderArgs, stats: &RenderStats) -> Metadata {
+/// The metadata of the image after `stats`; `done` is false for a checkpoint.
+fn metadata(
+    scene: &Scene,
+    hash: &str,
+    args: &RenderArgs,
+    stats: &RenderStats,
+    done: bool,
+) -> Metadata {
     let s = &scene.settings;
     let crop = args.crop.unwrap_or(Crop::full(s.width, s.height));
     Metadata {
@@ -210,6 +217,7 @@ fn metadata(scene: &Scene, hash: &str, args: &RenderArgs, stats: &RenderStats) -
         render_seconds: stats.seconds,
         passes: stats.passes,
         stopped_by: match stats.stopped_by {
+            _ if !done => "in progress",
             StopReason::SampleCount => "spp",
             StopReason::TimeLimit => "time-limit",
             StopReason::TargetNoise => "target-noise",
@@ -293,7 +301,7 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
         let due = last_write.is_none_or(|t| t.elapsed() >= checkpoint);
         // The final image is written below; a checkpoint after the last pass would be wasted.
         if due && stats.stopped_by == StopReason::SampleCount && stats.spp < s.spp {
-            let m = metadata(&scene, &hash, args, stats);
+            let m = metadata(&scene, &hash, args, stats, false);
             if let Err(e) =
                 write_image_with(&s.output, &acc.image(), s.tonemap, s.exposure, Some(&m))
             {
@@ -305,7 +313,7 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
     if let Some(e) = checkpoint_error {
         eprintln!("warning: a checkpoint could not be written: {e}");
     }
-    let m = metadata(&scene, &hash, args, &stats);
+    let m = metadata(&scene, &hash, args, &stats, true);
     write_image_with(&s.output, &image, s.tonemap, s.exposure, Some(&m))?;
     let (w, h) = (image.width, image.height);
     let noise = stats

@@ -31,7 +31,7 @@ pub struct Metadata {
     pub render_seconds: f64,
     pub passes: u32,
     /// What ended the render: `spp`, `time-limit`, `target-noise`,
-    /// `interrupted`, or `merge`.
+    /// `interrupted`, `merge`, or `in progress` for a checkpoint.
     pub stopped_by: String,
     /// The last estimate of the mean relative error, if there was one.
     pub noise: Option<f64>,

@@ -1,0 +1,582 @@
+//! Progressive rendering: each stopping rule, the noise estimate against
+//! the true error, interruption (in the library and by a real signal to a
+//! child process), checkpoints, metadata, and merging partial renders.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tracer::film::write::{read_with_metadata, write_image_with};
+use tracer::film::Image;
+use tracer::render::{render, Crop, RenderOptions, StopReason};
+use tracer::scene::desc::{IntegratorKind, Tonemap};
+use tracer::scene::Scene;
+
+fn cornell(size: u32, spp: u32) -> Scene {
+    let mut scene = tracer::scene::load(&common::repo().join("scenes/cornell-box.json")).unwrap();
+    scene.set_resolution(size, size);
+    scene.settings.spp = spp;
+    scene.settings.time_limit = None;
+    scene
+}
+
+fn options() -> RenderOptions {
+    RenderOptions {
+        threads: Some(2),
+        ..RenderOptions::default()
+    }
+}
+
+fn luminance_mean(image: &Image) -> f64 {
+    let m = image.mean();
+    (m.x + m.y + m.z) as f64 / 3.0
+}
+
+/// Mean over pixels of 2|I − R| / (I + R + 0.01) on channel means: what the
+/// half-buffer estimate (|A − B| / (A + B + 0.01)) estimates.
+fn true_error(image: &Image, reference: &Image) -> f64 {
+    let l = |c: glam::Vec3| (c.x + c.y + c.z) as f64 / 3.0;
+    let sum: f64 = image
+        .pixels
+        .iter()
+        .zip(&reference.pixels)
+        .map(|(&i, &r)| 2.0 * (l(i) - l(r)).abs() / (l(i) + l(r) + 0.01))
+        .sum();
+    sum / image.pixels.len() as f64
+}
+
+#[test]
+fn the_sample_count_stops_a_render_exactly() {
+    let (_, stats) = render(&cornell(16, 9), &options()).unwrap();
+    assert_eq!((stats.spp, stats.max_spp), (9, 9));
+    assert_eq!(stats.stopped_by, StopReason::SampleCount);
+}
+
+#[test]
+fn the_time_limit_stops_within_a_tile_and_normalises_by_samples_taken() {
+    let mut scene = cornell(48, 1 << 30);
+    scene.settings.time_limit = Some(0.3);
+    let start = Instant::now();
+    let (image, stats) = render(&scene, &options()).unwrap();
+    let took = start.elapsed().as_secs_f64();
+    assert_eq!(stats.stopped_by, StopReason::TimeLimit);
+    assert!(took < 0.3 + 0.5, "took {took} s");
+    assert!(stats.spp >= 1 && stats.spp < 1 << 20);
+    let reference = render(&cornell(48, 64), &options()).unwrap().0;
+    let (a, b) = (luminance_mean(&image), luminance_mean(&reference));
+    assert!((a / b - 1.0).abs() < 0.03, "mean {a} against {b}");
+}
+
+#[test]
+fn the_target_noise_stops_when_the_estimate_falls_below_it_and_tracks_the_true_error() {
+    let reference = render(&cornell(32, 2048), &options()).unwrap().0;
+    let mut previous_spp = 0;
+    for target in [0.2, 0.1, 0.05] {
+        let opts = RenderOptions {
+            target_noise: Some(target),
+            ..options()
+        };
+        let (image, stats) = render(&cornell(32, 1 << 20), &opts).unwrap();
+        assert_eq!(stats.stopped_by, StopReason::TargetNoise, "target {target}");
+        let noise = stats.noise.unwrap();
+        assert!(noise < target, "noise {noise} above target {target}");
+        assert!(
+            stats.spp > previous_spp,
+            "a lower target took no more samples"
+        );
+        previous_spp = stats.spp;
+        let truth = true_error(&image, &reference);
+        let ratio = noise / truth;
+        eprintln!(
+            "target {target}: {} spp, estimated {noise:.4}, true {truth:.4}",
+            stats.spp
+        );
+        // Sobol samples converge faster than independent ones, and either
+        // half alone is less well stratified than the whole: the estimate
+        // errs high, more so as samples grow (a safe side for a stopping rule).
+        assert!(
+            (0.8..1.7).contains(&ratio),
+            "target {target}: estimated {noise:.4}, true {truth:.4} at {} spp",
+            stats.spp
+        );
+    }
+}
+
+#[test]
+fn an_interrupted_render_returns_quickly_with_each_pixel_normalised() {
+    for integrator in [IntegratorKind::Pt, IntegratorKind::Bdpt] {
+        let mut scene = cornell(48, 1 << 30);
+        scene.settings.integrator = integrator;
+        let flag = Arc::new(AtomicBool::new(false));
+        let opts = RenderOptions {
+            interrupt: Some(flag.clone()),
+            ..options()
+        };
+        let setter = {
+            let flag = flag.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(400));
+                flag.store(true, Ordering::SeqCst);
+                Instant::now()
+            })
+        };
+        let (image, stats) = render(&scene, &opts).unwrap();
+        let stopped = Instant::now();
+        let set_at = setter.join().unwrap();
+        assert_eq!(stats.stopped_by, StopReason::Interrupted);
+        let lag = stopped.duration_since(set_at).as_secs_f64();
+        assert!(lag < 0.5, "{integrator:?}: stopped {lag} s after the flag");
+        let mut reference_scene = cornell(48, 64);
+        reference_scene.settings.integrator = integrator;
+        let reference = render(&reference_scene, &options()).unwrap().0;
+        let (a, b) = (luminance_mean(&image), luminance_mean(&reference));
+        assert!(
+            (a / b - 1.0).abs() < 0.03,
+            "{integrator:?}: mean {a} against {b} ({}..{} spp)",
+            stats.spp,
+            stats.max_spp
+        );
+    }
+}
+
+#[test]
+fn a_crop_renders_exactly_the_full_images_pixels() {
+    for integrator in [IntegratorKind::Pt, IntegratorKind::Lt] {
+        let mut scene = cornell(40, 4);
+        scene.settings.integrator = integrator;
+        let full = render(&scene, &options()).unwrap().0;
+        let crop = Crop {
+            x0: 7,
+            y0: 21,
+            x1: 33,
+            y1: 40,
+        };
+        let opts = RenderOptions {
+            crop: Some(crop),
+            ..options()
+        };
+        let part = render(&scene, &opts).unwrap().0;
+        assert_eq!((part.width, part.height), (26, 19));
+        for y in 0..part.height {
+            for x in 0..part.width {
+                assert_eq!(
+                    part.get(x, y),
+                    full.get(x + 7, y + 21),
+                    "{integrator:?} at {x},{y}"
+                );
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The command line: signals, checkpoints, metadata, merge.
+
+fn tracer() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_tracer"));
+    c.current_dir(common::repo());
+    c
+}
+
+fn run(args: &[&str]) -> Output {
+    let out = tracer().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "tracer {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn path_str(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn wait_for(path: &Path, limit: Duration) {
+    let start = Instant::now();
+    while !path.exists() {
+        assert!(start.elapsed() < limit, "{} never appeared", path.display());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn send(pid: u32, signal: i32) {
+    // SAFETY: kill(2) on our own child's pid.
+    let r = unsafe { libc::kill(pid as i32, signal) };
+    assert_eq!(r, 0, "kill failed");
+}
+
+/// A long render of the Cornell box into `out`, interrupted by `signals`
+/// once its first checkpoint exists; returns the exit status, how long it
+/// took to exit after the first signal, and the image with its metadata.
+fn interrupt_child(out: &Path, signals: &[i32]) -> (Option<i32>, f64, Image, String) {
+    let mut child = tracer()
+        .args([
+            "render",
+            "scenes/cornell-box.json",
+            "--width",
+            "64",
+            "--height",
+            "64",
+        ])
+        .args([
+            "--spp",
+            "1000000",
+            "--threads",
+            "2",
+            "-q",
+            "-o",
+            path_str(out),
+        ])
+        .spawn()
+        .unwrap();
+    wait_for(out, Duration::from_secs(20));
+    std::thread::sleep(Duration::from_millis(300));
+    let sent = Instant::now();
+    for &s in signals {
+        send(child.id(), s);
+    }
+    let status = child.wait().unwrap();
+    let lag = sent.elapsed().as_secs_f64();
+    let (image, meta) = read_with_metadata(out).unwrap();
+    (status.code(), lag, image, meta.stopped_by)
+}
+
+fn reference_mean() -> f64 {
+    let scene = cornell(64, 64);
+    luminance_mean(&render(&scene, &options()).unwrap().0)
+}
+
+#[test]
+fn sigint_and_sigterm_stop_a_render_within_a_second_and_write_a_normalised_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let expected = reference_mean();
+    for (name, signal) in [("int", libc::SIGINT), ("term", libc::SIGTERM)] {
+        let out = dir.path().join(format!("{name}.exr"));
+        let (code, lag, image, stopped_by) = interrupt_child(&out, &[signal]);
+        assert_eq!(code, Some(130), "SIG{name}");
+        assert!(lag < 1.0, "SIG{name}: exited {lag} s after the signal");
+        assert_eq!(stopped_by, "interrupted");
+        let mean = luminance_mean(&image);
+        assert!(
+            (mean / expected - 1.0).abs() < 0.03,
+            "SIG{name}: mean {mean} against {expected}"
+        );
+    }
+}
+
+#[test]
+fn a_second_ctrl_c_exits_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("twice.exr");
+    let (code, lag, image, _) = interrupt_child(&out, &[libc::SIGINT, libc::SIGINT]);
+    assert_eq!(code, Some(130));
+    assert!(lag < 1.0, "exited {lag} s after two signals");
+    // Whatever was written before is whole: the checkpoint, or the final image.
+    assert_eq!((image.width, image.height), (64, 64));
+}
+
+#[test]
+fn checkpoints_are_written_while_the_render_runs_with_the_right_brightness() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("progress.png");
+    let mut child = tracer()
+        .args([
+            "render",
+            "scenes/cornell-box.json",
+            "--width",
+            "64",
+            "--height",
+            "64",
+        ])
+        .args([
+            "--spp",
+            "1000000",
+            "--checkpoint",
+            "0.2",
+            "-q",
+            "-o",
+            path_str(&out),
+        ])
+        .spawn()
+        .unwrap();
+    let sidecar = tracer::film::metadata::sidecar_path(&out);
+    wait_for(&out, Duration::from_secs(20));
+    wait_for(&sidecar, Duration::from_secs(5));
+    std::thread::sleep(Duration::from_millis(600));
+    let first: tracer::film::metadata::Metadata =
+        serde_json::from_slice(&std::fs::read(&sidecar).unwrap()).unwrap();
+    std::thread::sleep(Duration::from_millis(600));
+    let later: tracer::film::metadata::Metadata =
+        serde_json::from_slice(&std::fs::read(&sidecar).unwrap()).unwrap();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(first.stopped_by, "in progress");
+    assert!(
+        later.spp > first.spp,
+        "no newer checkpoint: {} then {}",
+        first.spp,
+        later.spp
+    );
+    let png = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(png.dimensions(), (64, 64));
+    let mean: f64 = png
+        .pixels()
+        .map(|p| p.0.iter().map(|&c| c as f64).sum::<f64>())
+        .sum::<f64>()
+        / (64.0 * 64.0 * 3.0);
+    assert!(mean > 40.0, "the checkpoint looks black (mean {mean})");
+}
+
+#[test]
+fn outputs_carry_their_metadata() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("a.exr");
+    let png = dir.path().join("a.png");
+    for out in [&exr, &png] {
+        run(&[
+            "render",
+            "scenes/cornell-box.json",
+            "--width",
+            "20",
+            "--height",
+            "12",
+            "--spp",
+            "3",
+        ]
+        .into_iter()
+        .chain([
+            "--seed",
+            "7",
+            "--integrator",
+            "bdpt",
+            "-q",
+            "-o",
+            path_str(out),
+        ])
+        .collect::<Vec<_>>());
+    }
+    let (image, m) = read_with_metadata(&exr).unwrap();
+    assert_eq!((image.width, image.height), (20, 12));
+    assert_eq!((m.spp, m.max_spp, m.seed), (3, 3, 7));
+    assert_eq!(m.integrator, "bdpt");
+    assert_eq!((m.width, m.height, m.crop), (20, 12, [0, 0, 20, 12]));
+    assert_eq!(m.samples, vec![(0, 3)]);
+    assert_eq!(m.stopped_by, "spp");
+    assert!(m.program.starts_with("tracer "));
+    assert!(m.render_seconds > 0.0);
+    assert_eq!(m.scene_hash.len(), 64);
+    let side: tracer::film::metadata::Metadata =
+        serde_json::from_slice(&std::fs::read(tracer::film::metadata::sidecar_path(&png)).unwrap())
+            .unwrap();
+    assert_eq!(side.scene_hash, m.scene_hash, "the same scene hashes alike");
+    assert_eq!((side.spp, side.seed), (3, 7));
+}
+
+fn render_part(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
+    let out = dir.join(format!("{name}.exr"));
+    let mut args = vec![
+        "render",
+        "scenes/cornell-box.json",
+        "--width",
+        "48",
+        "--height",
+        "40",
+    ];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["-q", "-o", path_str(&out)]);
+    run(&args);
+    out
+}
+
+fn merge(inputs: &[PathBuf], out: &Path) -> Output {
+    tracer()
+        .arg("merge")
+        .args(inputs)
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn four_sample_ranges_merged_equal_one_render_of_all_samples() {
+    for integrator in ["pt", "lt", "bdpt"] {
+        let dir = tempfile::tempdir().unwrap();
+        let parts: Vec<PathBuf> = [0, 16, 32, 48]
+            .iter()
+            .map(|o| {
+                let offset = o.to_string();
+                render_part(
+                    dir.path(),
+                    &format!("o{o}"),
+                    &[
+                        "--integrator",
+                        integrator,
+                        "--spp",
+                        "16",
+                        "--sample-offset",
+                        &offset,
+                    ],
+                )
+            })
+            .collect();
+        let whole = render_part(
+            dir.path(),
+            "whole",
+            &["--integrator", integrator, "--spp", "64"],
+        );
+        let merged = dir.path().join("merged.exr");
+        let out = merge(&parts, &merged);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let (a, ma) = read_with_metadata(&merged).unwrap();
+        let (b, _) = read_with_metadata(&whole).unwrap();
+        assert_eq!((ma.spp, ma.samples.clone()), (64, vec![(0, 64)]));
+        for (p, q) in a.pixels.iter().zip(&b.pixels) {
+            let scale = q.abs().max_element().max(1e-3);
+            assert!(
+                (*p - *q).abs().max_element() <= 1e-5 * scale,
+                "{integrator}: merged {p} against {q}"
+            );
+        }
+    }
+}
+
+#[test]
+fn four_crops_merged_equal_the_full_image_exactly() {
+    for integrator in ["pt", "bdpt"] {
+        let dir = tempfile::tempdir().unwrap();
+        let crops = ["0,0,20,17", "20,0,48,17", "0,17,20,40", "20,17,48,40"];
+        let parts: Vec<PathBuf> = crops
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                render_part(
+                    dir.path(),
+                    &format!("c{k}"),
+                    &["--integrator", integrator, "--spp", "4", "--crop", c],
+                )
+            })
+            .collect();
+        let whole = render_part(
+            dir.path(),
+            "whole",
+            &["--integrator", integrator, "--spp", "4"],
+        );
+        let merged = dir.path().join("merged.exr");
+        let out = merge(&parts, &merged);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let (a, _) = read_with_metadata(&merged).unwrap();
+        let (b, _) = read_with_metadata(&whole).unwrap();
+        assert!(
+            a == b,
+            "{integrator}: the merged crops differ from the full image"
+        );
+    }
+}
+
+#[test]
+fn merge_refuses_parts_that_do_not_belong_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let a = render_part(d, "a", &["--spp", "4"]);
+    let b = render_part(d, "b", &["--spp", "4", "--sample-offset", "4"]);
+    let other_seed = render_part(
+        d,
+        "seed",
+        &["--spp", "4", "--sample-offset", "8", "--seed", "9"],
+    );
+    let other_integrator = render_part(
+        d,
+        "lt",
+        &["--spp", "4", "--sample-offset", "8", "--integrator", "lt"],
+    );
+    let other_depth = render_part(
+        d,
+        "depth",
+        &["--spp", "4", "--sample-offset", "8", "--max-depth", "3"],
+    );
+    let other_scene = d.join("lights.exr");
+    run(&[
+        "render",
+        "scenes/lights.json",
+        "--width",
+        "48",
+        "--height",
+        "40",
+        "--spp",
+        "4",
+    ]
+    .into_iter()
+    .chain(["--sample-offset", "8", "-q", "-o", path_str(&other_scene)])
+    .collect::<Vec<_>>());
+    let corner = render_part(d, "corner", &["--spp", "4", "--crop", "0,0,10,10"]);
+    // An interrupted render's pixels hold different sample counts.
+    let (image, mut meta) = read_with_metadata(&b).unwrap();
+    meta.max_spp = meta.spp + 2;
+    meta.samples = vec![(12, 4)];
+    let interrupted = d.join("interrupted.exr");
+    write_image_with(&interrupted, &image, Tonemap::Clamp, 0.0, Some(&meta)).unwrap();
+    let plain = d.join("plain.exr");
+    tracer::film::write::write_image(&plain, &image, Tonemap::Clamp, 0.0).unwrap();
+
+    let out = merge(&[a.clone(), b.clone()], &d.join("ok.exr"));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for (what, inputs, expect) in [
+        (
+            "the same samples twice",
+            vec![a.clone(), a.clone()],
+            "same samples",
+        ),
+        ("another seed", vec![a.clone(), other_seed], "the seed"),
+        (
+            "another integrator",
+            vec![a.clone(), other_integrator],
+            "the integrator",
+        ),
+        (
+            "another depth",
+            vec![a.clone(), other_depth],
+            "the maximum depth",
+        ),
+        ("another scene", vec![a.clone(), other_scene], "the scene"),
+        (
+            "an interrupted part",
+            vec![a.clone(), interrupted],
+            "interrupted",
+        ),
+        (
+            "no metadata",
+            vec![a.clone(), plain],
+            "not written by tracer",
+        ),
+        (
+            "uneven coverage",
+            vec![a.clone(), b.clone(), corner.clone()],
+            "same samples",
+        ),
+        ("pixels left uncovered", vec![corner], "uncovered"),
+    ] {
+        let target = d.join("refused.exr");
+        let out = merge(&inputs, &target);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{what}: {stderr}");
+        assert!(stderr.contains(expect), "{what}: {stderr}");
+        assert!(!target.exists(), "{what}: wrote an output anyway");
+    }
+}
