@@ -319,7 +319,10 @@ pub fn render_with(
         stats.passes += 1;
         stats.seconds = start.elapsed().as_secs_f64();
         acc.stats(&mut stats);
-        stats.noise = acc.noise();
+        // Two half images per pass: only worth it when noise decides.
+        if options.target_noise.is_some() {
+            stats.noise = acc.noise();
+        }
         let reason = if interrupted() {
             Some(StopReason::Interrupted)
         } else if deadline.is_some_and(|d| start.elapsed() >= d) {
@@ -343,6 +346,9 @@ pub fn render_with(
     }
     progress.finish();
     stats.seconds = start.elapsed().as_secs_f64();
+    if stats.noise.is_none() {
+        stats.noise = acc.noise();
+    }
     Ok((acc.image(), stats))
 }
 
