@@ -15,6 +15,14 @@ use tracer::render::{render, Crop, RenderOptions, StopReason};
 use tracer::scene::desc::{IntegratorKind, Tonemap};
 use tracer::scene::Scene;
 
+/// Tests that time a render hold this, so they do not share the two cores
+/// with each other (the test harness runs tests in parallel).
+static TIMING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn timing() -> std::sync::MutexGuard<'static, ()> {
+    TIMING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 fn cornell(size: u32, spp: u32) -> Scene {
     let mut scene = tracer::scene::load(&common::repo().join("scenes/cornell-box.json")).unwrap();
     scene.set_resolution(size, size);
@@ -57,13 +65,14 @@ fn the_sample_count_stops_a_render_exactly() {
 
 #[test]
 fn the_time_limit_stops_within_a_tile_and_normalises_by_samples_taken() {
+    let _serial = timing();
     let mut scene = cornell(48, 1 << 30);
     scene.settings.time_limit = Some(0.3);
     let start = Instant::now();
     let (image, stats) = render(&scene, &options()).unwrap();
     let took = start.elapsed().as_secs_f64();
     assert_eq!(stats.stopped_by, StopReason::TimeLimit);
-    assert!(took < 0.3 + 0.5, "took {took} s");
+    assert!(took < 0.3 + 1.0, "took {took} s");
     assert!(stats.spp >= 1 && stats.spp < 1 << 20);
     let reference = render(&cornell(48, 64), &options()).unwrap().0;
     let (a, b) = (luminance_mean(&image), luminance_mean(&reference));
@@ -107,6 +116,7 @@ fn the_target_noise_stops_when_the_estimate_falls_below_it_and_tracks_the_true_e
 
 #[test]
 fn an_interrupted_render_returns_quickly_with_each_pixel_normalised() {
+    let _serial = timing();
     for integrator in [IntegratorKind::Pt, IntegratorKind::Bdpt] {
         let mut scene = cornell(48, 1 << 30);
         scene.settings.integrator = integrator;
@@ -128,7 +138,7 @@ fn an_interrupted_render_returns_quickly_with_each_pixel_normalised() {
         let set_at = setter.join().unwrap();
         assert_eq!(stats.stopped_by, StopReason::Interrupted);
         let lag = stopped.duration_since(set_at).as_secs_f64();
-        assert!(lag < 0.5, "{integrator:?}: stopped {lag} s after the flag");
+        assert!(lag < 1.0, "{integrator:?}: stopped {lag} s after the flag");
         let mut reference_scene = cornell(48, 64);
         reference_scene.settings.integrator = integrator;
         let reference = render(&reference_scene, &options()).unwrap().0;
@@ -178,6 +188,11 @@ fn a_crop_renders_exactly_the_full_images_pixels() {
 fn tracer() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_tracer"));
     c.current_dir(common::repo());
+    // Keep what these renders cache out of the user's own scene cache.
+    c.env(
+        "TRACER_CACHE_DIR",
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join("scene-cache"),
+    );
     c
 }
 
@@ -252,6 +267,7 @@ fn reference_mean() -> f64 {
 
 #[test]
 fn sigint_and_sigterm_stop_a_render_within_a_second_and_write_a_normalised_image() {
+    let _serial = timing();
     let dir = tempfile::tempdir().unwrap();
     let expected = reference_mean();
     for (name, signal) in [("int", libc::SIGINT), ("term", libc::SIGTERM)] {
@@ -269,18 +285,62 @@ fn sigint_and_sigterm_stop_a_render_within_a_second_and_write_a_normalised_image
 }
 
 #[test]
-fn a_second_ctrl_c_exits_at_once() {
+fn a_second_ctrl_c_exits_at_once_without_writing() {
+    let _serial = timing();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("twice.exr");
-    let (code, lag, image, _) = interrupt_child(&out, &[libc::SIGINT, libc::SIGINT]);
-    assert_eq!(code, Some(130));
+    // A large image: after the first signal the render stops within a tile
+    // but then spends a while encoding and writing 4 M pixels, which is
+    // when the second signal arrives.
+    let child = tracer()
+        .args([
+            "render",
+            "scenes/cornell-box.json",
+            "--width",
+            "2048",
+            "--height",
+            "2048",
+        ])
+        .args([
+            "--spp",
+            "1000000",
+            "--threads",
+            "2",
+            "-q",
+            "-o",
+            path_str(&out),
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(&out, Duration::from_secs(60));
+    let sent = Instant::now();
+    send(child.id(), libc::SIGINT);
+    std::thread::sleep(Duration::from_millis(5));
+    send(child.id(), libc::SIGINT);
+    let output = child.wait_with_output().unwrap();
+    let lag = sent.elapsed().as_secs_f64();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("interrupted again"),
+        "the second signal went unseen: {stderr}"
+    );
     assert!(lag < 1.0, "exited {lag} s after two signals");
-    // Whatever was written before is whole: the checkpoint, or the final image.
-    assert_eq!((image.width, image.height), (64, 64));
+    // It exited without writing: the file is still the last checkpoint, whole.
+    let (image, meta) = read_with_metadata(&out).unwrap();
+    assert_eq!(meta.stopped_by, "in progress");
+    assert_eq!((image.width, image.height), (2048, 2048));
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left.len(), 1, "a temporary file was left behind: {left:?}");
 }
 
 #[test]
 fn checkpoints_are_written_while_the_render_runs_with_the_right_brightness() {
+    let _serial = timing();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("progress.png");
     let mut child = tracer()
@@ -528,6 +588,12 @@ fn merge_refuses_parts_that_do_not_belong_together() {
     meta.samples = vec![(12, 4)];
     let interrupted = d.join("interrupted.exr");
     write_image_with(&interrupted, &image, Tonemap::Clamp, 0.0, Some(&meta)).unwrap();
+    // A PFM whose sidecar was left from an earlier version of the image.
+    let stale = d.join("stale.pfm");
+    write_image_with(&stale, &image, Tonemap::Clamp, 0.0, Some(&meta)).unwrap();
+    let mut brighter = image.clone();
+    brighter.pixels[0] += glam::Vec3::splat(1.0);
+    tracer::film::write::write_image(&stale, &brighter, Tonemap::Clamp, 0.0).unwrap();
     let plain = d.join("plain.exr");
     tracer::film::write::write_image(&plain, &image, Tonemap::Clamp, 0.0).unwrap();
 
@@ -571,6 +637,7 @@ fn merge_refuses_parts_that_do_not_belong_together() {
             "same samples",
         ),
         ("pixels left uncovered", vec![corner], "uncovered"),
+        ("a stale sidecar", vec![a.clone(), stale], "another version"),
     ] {
         let target = d.join("refused.exr");
         let out = merge(&inputs, &target);

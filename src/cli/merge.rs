@@ -104,6 +104,18 @@ fn merge(parts: &[Part]) -> Result<(Image, Metadata)> {
                 return Err(differs(what, a, b));
             }
         }
+        if m.scene_hash.len() != 64 {
+            return Err(refuse(
+                &p.path,
+                format!(
+                    "has no scene hash ({:?}): nothing to check it against",
+                    m.scene_hash
+                ),
+            ));
+        }
+        if p.image.pixels.iter().any(|c| !c.is_finite()) {
+            return Err(refuse(&p.path, "holds NaN or infinite pixels".into()));
+        }
         if m.max_spp != m.spp {
             return Err(refuse(
                 &p.path,
@@ -198,6 +210,7 @@ fn merge(parts: &[Part]) -> Result<(Image, Metadata)> {
         passes: parts.iter().map(|p| p.meta.passes).max().unwrap_or(0),
         stopped_by: "merge".into(),
         noise: None,
+        pixels_hash: None,
         ..m0.clone()
     };
     Ok((image, meta))

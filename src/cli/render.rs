@@ -14,8 +14,9 @@ use crate::scene::desc::{Display, IntegratorKind, Tonemap};
 use crate::scene::{self, Scene};
 use crate::{Error, Result};
 use clap::Args;
+use std::io::Write;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -29,8 +30,8 @@ pub struct RenderArgs {
     pub output: Option<PathBuf>,
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorKind>,
-    /// Samples per pixel.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Samples per pixel (at most 2^31 - 1).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i32::MAX as i64))]
     pub spp: Option<u32>,
     /// Stop once this many seconds have passed (within one tile's work).
     #[arg(long, value_parser = positive_seconds)]
@@ -68,7 +69,8 @@ pub struct RenderArgs {
     pub crop: Option<Crop>,
     /// Number this render's samples from N on: processes with disjoint
     /// ranges take disjoint samples of the same pixels (for `tracer merge`).
-    #[arg(long, value_name = "N", default_value_t = 0)]
+    #[arg(long, value_name = "N", default_value_t = 0,
+          value_parser = clap::value_parser!(u32).range(0..=i32::MAX as i64))]
     pub sample_offset: u32,
     /// Show the image in a window as it refines (needs a build with
     /// `--features preview`).
@@ -116,8 +118,12 @@ const UNCAPPED_SPP: u32 = 1 << 30;
 /// scene's hash for the output's metadata.
 pub fn prepare(args: &RenderArgs) -> Result<(Scene, String)> {
     let desc = scene::parse_file(&args.scene)?;
-    let hash = scene_hash(&desc).map_or_else(|| "unknown".into(), |k| hex(&k));
+    let hash = scene_hash(&desc);
     let mut scene = scene::load_desc_cached(desc, args.cache.cache().as_ref())?;
+    // Only a mesh that cannot be read leaves no hash, and then the load fails first.
+    let hash = hash
+        .map(|k| hex(&k))
+        .ok_or_else(|| Error::Unsupported(format!("cannot hash {}", args.scene.display())))?;
     let s = &mut scene.settings;
     if let Some(o) = &args.output {
         s.output = o.clone();
@@ -162,6 +168,11 @@ pub fn prepare(args: &RenderArgs) -> Result<(Scene, String)> {
             )));
         }
     }
+    if args.bdpt_strategies.is_some() && (args.crop.is_some() || args.sample_offset > 0) {
+        return Err(Error::Unsupported(
+            "--bdpt-strategies renders the whole image from sample 0: it cannot be combined with --crop or --sample-offset".into(),
+        ));
+    }
     if args.sample_offset.checked_add(scene.settings.spp).is_none() {
         return Err(Error::Unsupported(
             "--sample-offset plus the samples per pixel exceeds 2^32".into(),
@@ -179,17 +190,46 @@ pub const INTERRUPTED_EXIT: i32 = 130;
 fn interrupt_flag() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     let handler_flag = flag.clone();
+    // Signals are counted apart from the flag, which closing the preview
+    // window also sets: only a second *signal* exits at once.
+    let signals = AtomicUsize::new(0);
     let installed = ctrlc::set_handler(move || {
-        if handler_flag.swap(true, Ordering::SeqCst) {
-            eprintln!("\ninterrupted again: exiting without writing");
-            std::process::exit(INTERRUPTED_EXIT);
+        // ctrlc runs this on a thread of its own; a closed stderr must not
+        // panic it (that would leave later signals unanswered).
+        let say = |m: &str| {
+            let _ = writeln!(std::io::stderr(), "\n{m}");
+        };
+        match signal_action(&signals) {
+            SignalAction::ExitNow => {
+                say("interrupted again: exiting without writing");
+                crate::film::write::remove_writes_in_flight();
+                std::process::exit(INTERRUPTED_EXIT);
+            }
+            SignalAction::Stop => {
+                handler_flag.store(true, Ordering::SeqCst);
+                say("interrupted: finishing the tiles in flight and writing the image (Ctrl-C again to quit at once)");
+            }
         }
-        eprintln!("\ninterrupted: finishing the tiles in flight and writing the image (Ctrl-C again to quit at once)");
     });
     if let Err(e) = installed {
         eprintln!("warning: cannot catch Ctrl-C ({e}); an interrupted render will be lost");
     }
     flag
+}
+
+#[derive(Debug, PartialEq, Eq)]
+enum SignalAction {
+    Stop,
+    ExitNow,
+}
+
+/// The first signal stops the render; any later one exits at once.
+fn signal_action(signals: &AtomicUsize) -> SignalAction {
+    if signals.fetch_add(1, Ordering::SeqCst) == 0 {
+        SignalAction::Stop
+    } else {
+        SignalAction::ExitNow
+    }
 }
 
 /// The metadata of the image after `stats`; `done` is false for a checkpoint.
@@ -225,6 +265,7 @@ fn metadata(
         }
         .into(),
         noise: stats.noise,
+        pixels_hash: None,
     }
 }
 
@@ -288,9 +329,22 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
         interrupt: Some(interrupt.clone()),
     };
     let s = &scene.settings;
-    let mut window = (want_preview && preview::AVAILABLE)
+    let mut window = match (want_preview && preview::AVAILABLE)
         .then(|| preview::Preview::open(&scene, options.crop, interrupt.clone()))
-        .transpose()?;
+    {
+        None => None,
+        Some(Ok(w)) => Some(w),
+        // Asked for on the command line: an error. Asked for by a T-racer
+        // scene: the image is what matters.
+        Some(Err(e)) if args.preview => return Err(e),
+        Some(Err(e)) => {
+            eprintln!(
+                "warning: {e}; writing {} only",
+                scene.settings.output.display()
+            );
+            None
+        }
+    };
     let checkpoint = Duration::from_secs_f32(args.checkpoint);
     let mut last_write: Option<Instant> = None;
     let mut checkpoint_error = None;
@@ -348,6 +402,9 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
         StopReason::SampleCount => {}
     }
     if let Some(dir) = &args.bdpt_strategies {
+        // As many samples as the main render took, whatever stopped it.
+        let mut scene = scene;
+        scene.settings.spp = stats.spp;
         write_strategies(&scene, &options, dir)?;
     }
     if let Some(w) = window.take() {
@@ -375,4 +432,17 @@ fn write_strategies(scene: &Scene, options: &RenderOptions, dir: &std::path::Pat
         dir.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_first_signal_stops_and_the_second_exits() {
+        let signals = AtomicUsize::new(0);
+        assert_eq!(signal_action(&signals), SignalAction::Stop);
+        assert_eq!(signal_action(&signals), SignalAction::ExitNow);
+        assert_eq!(signal_action(&signals), SignalAction::ExitNow);
+    }
 }

@@ -35,6 +35,23 @@ pub struct Metadata {
     pub stopped_by: String,
     /// The last estimate of the mean relative error, if there was one.
     pub noise: Option<f64>,
+    /// In a sidecar: BLAKE3 of the image's linear pixels, so a sidecar left
+    /// beside an older version of its image is noticed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pixels_hash: Option<String>,
+}
+
+/// BLAKE3 of an image's size and linear pixels.
+pub fn pixels_hash(image: &super::Image) -> String {
+    let mut h = blake3::Hasher::new();
+    h.update(&image.width.to_le_bytes());
+    h.update(&image.height.to_le_bytes());
+    for p in &image.pixels {
+        for v in p.to_array() {
+            h.update(&v.to_le_bytes());
+        }
+    }
+    h.finalize().to_hex().to_string()
 }
 
 pub fn program() -> String {
@@ -147,6 +164,7 @@ impl Metadata {
             passes: int("passes")?,
             stopped_by: text("stoppedBy")?,
             noise: get("noise").ok().and_then(|_| float("noise").ok()),
+            pixels_hash: None,
         })
     }
 }

@@ -5,7 +5,7 @@
 //! target, flushed to disk and renamed into place: an interrupted or failed
 //! write never leaves a broken image, nor destroys the previous one.
 
-use super::metadata::{sidecar_path, Metadata};
+use super::metadata::{pixels_hash, sidecar_path, Metadata};
 use super::tonemap::to_8bit;
 use super::Image;
 use crate::scene::desc::Tonemap;
@@ -59,7 +59,11 @@ pub fn write_image_with(
             message,
         })?;
     if let (Some(m), false) = (metadata, format == ImageFormat::Exr) {
-        let json = serde_json::to_vec_pretty(m).expect("metadata serialises");
+        let m = Metadata {
+            pixels_hash: Some(pixels_hash(image)),
+            ..m.clone()
+        };
+        let json = serde_json::to_vec_pretty(&m).expect("metadata serialises");
         write_atomic(&sidecar_path(path), &json)?;
     }
     write_atomic(path, &bytes)
@@ -151,16 +155,40 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
+    in_flight()
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(temp.clone());
     let result = (|| {
         let mut file = std::fs::File::create(&temp)?;
         file.write_all(bytes)?;
         file.sync_all()?;
         std::fs::rename(&temp, path)
     })();
+    in_flight()
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .retain(|t| *t != temp);
     result.map_err(|e| {
         let _ = std::fs::remove_file(&temp);
         Error::io(path, e)
     })
+}
+
+/// Temporary files being written now.
+fn in_flight() -> &'static std::sync::Mutex<Vec<PathBuf>> {
+    static IN_FLIGHT: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+    &IN_FLIGHT
+}
+
+/// Removes the temporary files of writes still in progress, for a process
+/// about to exit in the middle of one (a second Ctrl-C): the previous
+/// image stays, and no half-written temporary file is left beside it.
+pub fn remove_writes_in_flight() {
+    let temps = std::mem::take(&mut *in_flight().lock().unwrap_or_else(|e| e.into_inner()));
+    for t in temps {
+        let _ = std::fs::remove_file(t);
+    }
 }
 
 /// Reads a PFM written by [`write_image`] (or any RGB little-endian PFM).
@@ -237,10 +265,21 @@ pub fn read_with_metadata(path: &Path) -> Result<(Image, Metadata)> {
             let image = read_pfm(path)?;
             let side = sidecar_path(path);
             let text = std::fs::read(&side).map_err(|e| Error::io(&side, e))?;
-            let metadata = serde_json::from_slice(&text).map_err(|e| Error::Image {
+            let metadata: Metadata = serde_json::from_slice(&text).map_err(|e| Error::Image {
                 path: side.clone(),
                 message: format!("not tracer metadata: {e}"),
             })?;
+            if metadata
+                .pixels_hash
+                .as_ref()
+                .is_some_and(|h| *h != pixels_hash(&image))
+            {
+                return Err(Error::Image {
+                    path: side,
+                    message: "describes another version of its image (the pixels' hash differs)"
+                        .into(),
+                });
+            }
             Ok((image, metadata))
         }
         _ => Err(bad(

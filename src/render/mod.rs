@@ -207,7 +207,12 @@ impl Accumulation {
     }
 
     fn stats(&self, stats: &mut RenderStats) {
-        let counted = self.tiles.iter().filter(|t| self.overlaps_crop(t));
+        // A splatting integrator's crop receives light from every traced
+        // tile, so all of them count; the path tracer's only its own.
+        let counted = self
+            .tiles
+            .iter()
+            .filter(|t| self.splatting || self.overlaps_crop(t));
         stats.spp = counted.clone().map(Tile::spp).min().unwrap_or(0);
         stats.max_spp = counted.clone().map(Tile::spp).max().unwrap_or(0);
         stats.samples = counted
@@ -270,7 +275,13 @@ pub fn render_with(
             .as_ref()
             .is_some_and(|f| f.load(Ordering::Relaxed))
     };
-    let stop_now = || interrupted() || deadline.is_some_and(|d| start.elapsed() >= d);
+    let past_deadline = || deadline.is_some_and(|d| start.elapsed() >= d);
+    if options.sample_offset.checked_add(settings.spp).is_none() {
+        return Err(Error::Unsupported(format!(
+            "sample offset {} plus {} samples per pixel exceeds 2^32",
+            options.sample_offset, settings.spp
+        )));
+    }
     let batch = if splatting {
         SPLAT_BATCH
     } else {
@@ -280,6 +291,7 @@ pub fn render_with(
     let mut taken = 0u32;
 
     while taken < settings.spp {
+        let first_pass_done = stats.passes > 0;
         let first = options.sample_offset + taken;
         let count = pass_size(stats.passes).min(settings.spp - taken);
         for tiles in acc.tiles.chunks_mut(batch) {
@@ -287,7 +299,10 @@ pub fn render_with(
                 tiles
                     .par_iter_mut()
                     .map(|tile| {
-                        if stop_now() {
+                        // The first pass always completes under a time
+                        // limit, so every pixel has a sample; an
+                        // interruption may cut even that one short.
+                        if interrupted() || (first_pass_done && past_deadline()) {
                             return None;
                         }
                         let mut sinks = [SplatSink::default(), SplatSink::default()];
@@ -325,7 +340,7 @@ pub fn render_with(
         }
         let reason = if interrupted() {
             Some(StopReason::Interrupted)
-        } else if deadline.is_some_and(|d| start.elapsed() >= d) {
+        } else if past_deadline() {
             Some(StopReason::TimeLimit)
         } else if options
             .target_noise

@@ -23,23 +23,32 @@ export DISPLAY=$display
 for _ in $(seq 100); do [ -S "/tmp/.X11-unix/X${display#:}" ] && break; sleep 0.1; done
 
 # Waits for FILE, then for the window to show a few more passes, screenshots
-# the screen into SHOT, and stops tracer (PID) with Ctrl-C.
+# the screen into SHOT, stops tracer (PID) with Ctrl-C, and checks that it
+# exits within 10 seconds with status EXPECTED.
 screenshot_and_stop() {
-    local pid=$1 file=$2 shot=$3
+    local pid=$1 file=$2 shot=$3 expected=$4
     for _ in $(seq 200); do [ -s "$file" ] && break; sleep 0.1; done
-    [ -s "$file" ] || { echo "preview: $file never appeared"; exit 1; }
+    [ -s "$file" ] || { echo "preview: $file never appeared"; kill -9 "$pid"; exit 1; }
     sleep 2
     xwd -root -silent -display "$display" >"$shot"
     kill -INT "$pid"
+    for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+    if kill -0 "$pid" 2>/dev/null; then
+        kill -9 "$pid"
+        echo "preview: tracer did not exit after Ctrl-C"
+        exit 1
+    fi
     local status=0
     wait "$pid" || status=$?
     echo "tracer exited with $status"
+    [ "$status" -eq "$expected" ] || { echo "preview: expected exit status $expected"; exit 1; }
 }
 
 echo "== render --preview"
 $tracer render scenes/cornell-box.json --preview --width 256 --height 256 --spp 100000 \
     --checkpoint 0.2 -q -o "$tmp/box.png" &
-screenshot_and_stop $! "$tmp/box.png" "$tmp/box.xwd"
+# Ctrl-C during the render: it writes the image and exits with 130.
+screenshot_and_stop $! "$tmp/box.png" "$tmp/box.xwd" 130
 # The image written at Ctrl-C is the window's last frame or one pass newer.
 python3 tests/preview/check_screenshot.py "$tmp/box.xwd" "$tmp/box.png" "$shots/render-preview.png"
 
@@ -49,6 +58,7 @@ sed -i 's/"Type": "TGA"/"Type": "Window"/' "$tmp/trs/cornell.trs"
 grep -q '"Type": "Window"' "$tmp/trs/cornell.trs"
 $tracer render "$tmp/trs/cornell.trs" -q -o "$tmp/trs.png" &
 # This render finishes; the window then keeps showing it until closed.
-screenshot_and_stop $! "$tmp/trs.png" "$tmp/trs.xwd"
+# Ctrl-C after it: the window closes and tracer exits normally.
+screenshot_and_stop $! "$tmp/trs.png" "$tmp/trs.xwd" 0
 python3 tests/preview/check_screenshot.py "$tmp/trs.xwd" "$tmp/trs.png" "$shots/trs-window.png"
 echo "preview: ok"
