@@ -224,30 +224,27 @@ fn send(pid: u32, signal: i32) {
     assert_eq!(r, 0, "kill failed");
 }
 
+/// A render of the Cornell box at 64 × 64 into `out` that would run for hours.
+fn long_render(out: &Path, extra: &[&str]) -> Command {
+    let mut c = tracer();
+    c.args([
+        "render",
+        "scenes/cornell-box.json",
+        "--width",
+        "64",
+        "--height",
+        "64",
+    ])
+    .args(["--spp", "1000000", "-q", "-o", path_str(out)])
+    .args(extra);
+    c
+}
+
 /// A long render of the Cornell box into `out`, interrupted by `signals`
 /// once its first checkpoint exists; returns the exit status, how long it
 /// took to exit after the first signal, and the image with its metadata.
 fn interrupt_child(out: &Path, signals: &[i32]) -> (Option<i32>, f64, Image, String) {
-    let mut child = tracer()
-        .args([
-            "render",
-            "scenes/cornell-box.json",
-            "--width",
-            "64",
-            "--height",
-            "64",
-        ])
-        .args([
-            "--spp",
-            "1000000",
-            "--threads",
-            "2",
-            "-q",
-            "-o",
-            path_str(out),
-        ])
-        .spawn()
-        .unwrap();
+    let mut child = long_render(out, &["--threads", "2"]).spawn().unwrap();
     wait_for(out, Duration::from_secs(20));
     std::thread::sleep(Duration::from_millis(300));
     let sent = Instant::now();
@@ -343,26 +340,7 @@ fn checkpoints_are_written_while_the_render_runs_with_the_right_brightness() {
     let _serial = timing();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("progress.png");
-    let mut child = tracer()
-        .args([
-            "render",
-            "scenes/cornell-box.json",
-            "--width",
-            "64",
-            "--height",
-            "64",
-        ])
-        .args([
-            "--spp",
-            "1000000",
-            "--checkpoint",
-            "0.2",
-            "-q",
-            "-o",
-            path_str(&out),
-        ])
-        .spawn()
-        .unwrap();
+    let mut child = long_render(&out, &["--checkpoint", "0.2"]).spawn().unwrap();
     let sidecar = tracer::film::metadata::sidecar_path(&out);
     wait_for(&out, Duration::from_secs(20));
     wait_for(&sidecar, Duration::from_secs(5));
@@ -462,6 +440,18 @@ fn merge(inputs: &[PathBuf], out: &Path) -> Output {
         .unwrap()
 }
 
+/// Merges `parts` into `dir/merged.exr`, which must succeed, and reads it.
+fn merged(parts: &[PathBuf], dir: &Path) -> (Image, tracer::film::metadata::Metadata) {
+    let target = dir.join("merged.exr");
+    let out = merge(parts, &target);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    read_with_metadata(&target).unwrap()
+}
+
 #[test]
 fn four_sample_ranges_merged_equal_one_render_of_all_samples() {
     for integrator in ["pt", "lt", "bdpt"] {
@@ -489,14 +479,7 @@ fn four_sample_ranges_merged_equal_one_render_of_all_samples() {
             "whole",
             &["--integrator", integrator, "--spp", "64"],
         );
-        let merged = dir.path().join("merged.exr");
-        let out = merge(&parts, &merged);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let (a, ma) = read_with_metadata(&merged).unwrap();
+        let (a, ma) = merged(&parts, dir.path());
         let (b, _) = read_with_metadata(&whole).unwrap();
         assert_eq!((ma.spp, ma.samples.clone()), (64, vec![(0, 64)]));
         for (p, q) in a.pixels.iter().zip(&b.pixels) {
@@ -530,14 +513,7 @@ fn four_crops_merged_equal_the_full_image_exactly() {
             "whole",
             &["--integrator", integrator, "--spp", "4"],
         );
-        let merged = dir.path().join("merged.exr");
-        let out = merge(&parts, &merged);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let (a, _) = read_with_metadata(&merged).unwrap();
+        let (a, _) = merged(&parts, dir.path());
         let (b, _) = read_with_metadata(&whole).unwrap();
         assert!(
             a == b,
