@@ -623,3 +623,57 @@ fn merge_refuses_parts_that_do_not_belong_together() {
         assert!(!target.exists(), "{what}: wrote an output anyway");
     }
 }
+
+#[test]
+fn adaptive_sampling_brings_every_tile_below_the_target_at_less_cost_than_uniform() {
+    let _serial = timing();
+    let load = |spp: u32| {
+        let path = common::repo().join("scenes/cornell-caustics.json");
+        let mut scene = tracer::scene::load(&path).unwrap();
+        scene.set_resolution(48, 48);
+        scene.settings.spp = spp;
+        scene.settings.time_limit = None;
+        scene
+    };
+    let target = 0.1;
+    let adaptive = RenderOptions {
+        target_noise: Some(target),
+        adaptive: true,
+        ..options()
+    };
+    let mut worst_adaptive = 0.0f64;
+    let (image, stats) = tracer::render::render_with(&load(1 << 20), &adaptive, |acc, _| {
+        if let Some(noise) = acc.tile_noise() {
+            worst_adaptive = noise.into_iter().flatten().fold(0.0, f64::max);
+        }
+    })
+    .unwrap();
+    assert_eq!(stats.stopped_by, StopReason::TargetNoise);
+    assert!(worst_adaptive < target, "a tile at {worst_adaptive}");
+    assert!(
+        stats.max_spp > stats.spp,
+        "every tile took the same samples"
+    );
+
+    // The same number of samples spread evenly leaves some tile noisier.
+    let pixels = 48 * 48;
+    let even_spp = stats.samples.div_ceil(pixels) as u32;
+    let mut worst_uniform = 0.0f64;
+    let (uniform, _) = tracer::render::render_with(&load(even_spp), &options(), |acc, _| {
+        if let Some(noise) = acc.tile_noise() {
+            worst_uniform = noise.into_iter().flatten().fold(0.0, f64::max);
+        }
+    })
+    .unwrap();
+    eprintln!(
+        "adaptive: {}..{} spp ({} samples), worst tile {worst_adaptive:.4}; uniform at {even_spp} spp: worst tile {worst_uniform:.4}",
+        stats.spp, stats.max_spp, stats.samples
+    );
+    assert!(
+        worst_uniform > worst_adaptive,
+        "uniform {worst_uniform} against adaptive {worst_adaptive} at equal samples"
+    );
+    // Unequal sample counts, each pixel normalised by its own: no bias.
+    let (a, b) = (luminance_mean(&image), luminance_mean(&uniform));
+    assert!((a / b - 1.0).abs() < 0.05, "mean {a} against {b}");
+}

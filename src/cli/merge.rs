@@ -120,7 +120,7 @@ fn merge(parts: &[Part]) -> Result<(Image, Metadata)> {
             return Err(refuse(
                 &p.path,
                 format!(
-                    "was interrupted in the middle of a pass ({} to {} samples per pixel): its pixels cannot be weighted alike",
+                    "holds {} to {} samples per pixel (an interrupted or adaptive render): its pixels cannot be weighted alike",
                     m.spp, m.max_spp
                 ),
             ));

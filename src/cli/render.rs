@@ -64,6 +64,10 @@ pub struct RenderArgs {
     /// this (e.g. 0.02); the scene's spp no longer caps the render, --spp does.
     #[arg(long, value_name = "X", value_parser = positive_fraction)]
     pub target_noise: Option<f64>,
+    /// With --target-noise: tiles whose own noise is below the target take
+    /// no more samples (pt and bdpt).
+    #[arg(long, requires = "target_noise")]
+    pub adaptive: bool,
     /// Render only the pixels X0 <= x < X1, Y0 <= y < Y1.
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_crop)]
     pub crop: Option<Crop>,
@@ -327,6 +331,7 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
         sample_offset: args.sample_offset,
         target_noise: args.target_noise,
         interrupt: Some(interrupt.clone()),
+        adaptive: args.adaptive,
     };
     let s = &scene.settings;
     let mut window = match (want_preview && preview::AVAILABLE)

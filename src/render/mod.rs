@@ -35,6 +35,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+/// Samples a tile takes before adaptive sampling may judge its noise: fewer
+/// give too rough an estimate from 256 pixels.
+const MIN_ADAPTIVE_SPP: u32 = 16;
+
 /// Tiles per batch for the splatting integrators: bounds the splat lists held
 /// at once (a few MB) while leaving enough tiles to keep every thread busy.
 const SPLAT_BATCH: usize = 64;
@@ -89,6 +93,11 @@ pub struct RenderOptions {
     pub target_noise: Option<f64>,
     /// Set from outside (a signal handler) to stop within a tile's time.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// With `target_noise`: a tile whose own noise falls below the target
+    /// takes no more samples, so the time goes where the noise is, and the
+    /// render stops once every tile is below it (a stricter rule than the
+    /// image's mean).
+    pub adaptive: bool,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -162,11 +171,18 @@ impl Accumulation {
     /// full image, estimated from two independent halves. `None` until
     /// both halves have samples everywhere.
     pub fn noise(&self) -> Option<f64> {
+        self.noise_map()
+            .map(|(map, _)| map.iter().sum::<f64>() / map.len().max(1) as f64)
+    }
+
+    /// Each crop pixel's relative error estimate (row-major over the crop),
+    /// and the crop's width; `None` until both halves have samples everywhere.
+    fn noise_map(&self) -> Option<(Vec<f64>, u32)> {
         if self.tiles.iter().any(|t| t.samples.contains(&0)) {
             return None;
         }
         let (a, b) = (self.image_of(&[0]), self.image_of(&[1]));
-        let sum: f64 = a
+        let map = a
             .pixels
             .iter()
             .zip(&b.pixels)
@@ -174,8 +190,48 @@ impl Accumulation {
                 let (a, b) = (a.element_sum() as f64 / 3.0, b.element_sum() as f64 / 3.0);
                 (a - b).abs() / (a + b + 0.01)
             })
-            .sum();
-        Some(sum / a.pixels.len().max(1) as f64)
+            .collect();
+        Some((map, a.width))
+    }
+
+    /// Each tile's mean noise over its pixels in the crop, in tile order
+    /// (`None` for tiles outside a crop, traced only for their light paths).
+    pub fn tile_noise(&self) -> Option<Vec<Option<f64>>> {
+        let (map, width) = self.noise_map()?;
+        let crop = self.crop;
+        let noise = self
+            .tiles
+            .iter()
+            .map(|tile| {
+                let (mut sum, mut n) = (0.0, 0u32);
+                for y in tile.y0.max(crop.y0)..tile.y1.min(crop.y1) {
+                    for x in tile.x0.max(crop.x0)..tile.x1.min(crop.x1) {
+                        sum += map[((y - crop.y0) * width + (x - crop.x0)) as usize];
+                        n += 1;
+                    }
+                }
+                (n > 0).then(|| sum / n as f64)
+            })
+            .collect();
+        Some(noise)
+    }
+
+    /// Marks tiles whose own noise is below `target` as converged, so
+    /// adaptive sampling gives them no more samples; true once every tile
+    /// in the crop is.
+    fn mark_converged(&mut self, target: f64) -> bool {
+        let Some(noise) = self.tile_noise() else {
+            return false;
+        };
+        let mut all = true;
+        for (tile, noise) in self.tiles.iter_mut().zip(noise) {
+            let Some(noise) = noise else { continue };
+            if !tile.converged && tile.spp() >= MIN_ADAPTIVE_SPP && noise < target {
+                tile.converged = true;
+            }
+            all &= tile.converged;
+        }
+        all
     }
 
     fn image_of(&self, halves: &[usize]) -> Image {
@@ -251,6 +307,13 @@ pub fn render_with(
         )));
     }
     let splatting = settings.integrator != IntegratorKind::Pt;
+    if options.adaptive
+        && (options.target_noise.is_none() || settings.integrator == IntegratorKind::Lt)
+    {
+        return Err(Error::Unsupported(
+            "adaptive sampling needs a target noise, and an integrator with per-pixel samples (pt or bdpt; a light path lands anywhere)".into(),
+        ));
+    }
     // Light paths land anywhere: a splatting integrator traces the paths of
     // every pixel, so that a crop's pixels receive all their light.
     let traced = if splatting { full } else { crop };
@@ -302,7 +365,7 @@ pub fn render_with(
                         // The first pass always completes under a time
                         // limit, so every pixel has a sample; an
                         // interruption may cut even that one short.
-                        if interrupted() || (first_pass_done && past_deadline()) {
+                        if interrupted() || (first_pass_done && past_deadline()) || tile.converged {
                             return None;
                         }
                         let mut sinks = [SplatSink::default(), SplatSink::default()];
@@ -335,18 +398,20 @@ pub fn render_with(
         stats.seconds = start.elapsed().as_secs_f64();
         acc.stats(&mut stats);
         // Two half images per pass: only worth it when noise decides.
-        if options.target_noise.is_some() {
+        let mut converged = false;
+        if let Some(target) = options.target_noise {
             stats.noise = acc.noise();
+            converged = if options.adaptive {
+                acc.mark_converged(target)
+            } else {
+                stats.noise.is_some_and(|noise| noise < target)
+            };
         }
         let reason = if interrupted() {
             Some(StopReason::Interrupted)
         } else if past_deadline() {
             Some(StopReason::TimeLimit)
-        } else if options
-            .target_noise
-            .zip(stats.noise)
-            .is_some_and(|(target, noise)| noise < target)
-        {
+        } else if converged {
             Some(StopReason::TargetNoise)
         } else {
             None

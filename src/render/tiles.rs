@@ -23,6 +23,8 @@ pub struct Tile {
     /// Samples each pixel of this tile has received, per half.
     pub samples: [u32; 2],
     pub discarded: u64,
+    /// Adaptive sampling judged this tile's noise low enough: no more samples.
+    pub converged: bool,
 }
 
 impl Tile {
@@ -83,6 +85,7 @@ pub fn split(area: Crop) -> Vec<Tile> {
                 sums: [vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]],
                 samples: [0, 0],
                 discarded: 0,
+                converged: false,
             });
         }
     }
