@@ -4,10 +4,12 @@
 mod cache;
 mod merge;
 mod render;
+mod signals;
 
 pub use cache::{CacheArgs, CacheCommand};
 pub use merge::MergeArgs;
-pub use render::{prepare, RenderArgs, INTERRUPTED_EXIT};
+pub use render::{prepare, RenderArgs};
+pub use signals::INTERRUPTED_EXIT;
 
 use crate::bench::{BenchOptions, RayKind};
 use crate::film::write::read_linear;

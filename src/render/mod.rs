@@ -12,10 +12,12 @@
 //! image in tile order: no locks in the hot path, and the same sums in the
 //! same order for any thread count. Tiles run in batches so the lists stay small.
 
+mod accumulation;
 mod progress;
 mod strategies;
 mod tiles;
 
+pub use accumulation::Accumulation;
 pub use strategies::{render_strategies, StrategyImages, MAX_STRATEGY_LENGTH};
 
 pub use tiles::{Tile, TILE_SIZE};
@@ -34,10 +36,6 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-
-/// Samples a tile takes before adaptive sampling may judge its noise: fewer
-/// give too rough an estimate from 256 pixels.
-const MIN_ADAPTIVE_SPP: u32 = 16;
 
 /// Tiles per batch for the splatting integrators: bounds the splat lists held
 /// at once (a few MB) while leaving enough tiles to keep every thread busy.
@@ -144,143 +142,6 @@ pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
         .num_threads(threads.unwrap_or(0))
         .build()
         .map_err(|e| Error::Unsupported(format!("cannot start worker threads: {e}")))
-}
-
-/// Everything a render has accumulated: the tiles' sums and, for the
-/// splatting integrators, the splats' sums over the whole image, each split
-/// into the two halves of even and odd sample indices.
-pub struct Accumulation {
-    width: u32,
-    crop: Crop,
-    tiles: Vec<Tile>,
-    splatting: bool,
-    splat_sums: [Vec<DVec3>; 2],
-    /// Light paths traced per half: one per pixel sample taken.
-    light_paths: [u64; 2],
-    full_pixels: u64,
-}
-
-impl Accumulation {
-    /// The image over the crop, each pixel divided by the samples it got.
-    pub fn image(&self) -> Image {
-        self.image_of(&[0, 1])
-    }
-
-    /// The mean over pixels of |A − B| / (A + B + 0.01), A and B the two
-    /// half images (channel means): the relative standard error of the
-    /// full image, estimated from two independent halves. `None` until
-    /// both halves have samples everywhere.
-    pub fn noise(&self) -> Option<f64> {
-        self.noise_map()
-            .map(|(map, _)| map.iter().sum::<f64>() / map.len().max(1) as f64)
-    }
-
-    /// Each crop pixel's relative error estimate (row-major over the crop),
-    /// and the crop's width; `None` until both halves have samples everywhere.
-    fn noise_map(&self) -> Option<(Vec<f64>, u32)> {
-        if self.tiles.iter().any(|t| t.samples.contains(&0)) {
-            return None;
-        }
-        let (a, b) = (self.image_of(&[0]), self.image_of(&[1]));
-        let map = a
-            .pixels
-            .iter()
-            .zip(&b.pixels)
-            .map(|(a, b)| {
-                let (a, b) = (a.element_sum() as f64 / 3.0, b.element_sum() as f64 / 3.0);
-                (a - b).abs() / (a + b + 0.01)
-            })
-            .collect();
-        Some((map, a.width))
-    }
-
-    /// Each tile's mean noise over its pixels in the crop, in tile order
-    /// (`None` for tiles outside a crop, traced only for their light paths).
-    pub fn tile_noise(&self) -> Option<Vec<Option<f64>>> {
-        let (map, width) = self.noise_map()?;
-        let crop = self.crop;
-        let noise = self
-            .tiles
-            .iter()
-            .map(|tile| {
-                let (mut sum, mut n) = (0.0, 0u32);
-                for y in tile.y0.max(crop.y0)..tile.y1.min(crop.y1) {
-                    for x in tile.x0.max(crop.x0)..tile.x1.min(crop.x1) {
-                        sum += map[((y - crop.y0) * width + (x - crop.x0)) as usize];
-                        n += 1;
-                    }
-                }
-                (n > 0).then(|| sum / n as f64)
-            })
-            .collect();
-        Some(noise)
-    }
-
-    /// Marks tiles whose own noise is below `target` as converged, so
-    /// adaptive sampling gives them no more samples; true once every tile
-    /// in the crop is.
-    fn mark_converged(&mut self, target: f64) -> bool {
-        let Some(noise) = self.tile_noise() else {
-            return false;
-        };
-        let mut all = true;
-        for (tile, noise) in self.tiles.iter_mut().zip(noise) {
-            let Some(noise) = noise else { continue };
-            if !tile.converged && tile.spp() >= MIN_ADAPTIVE_SPP && noise < target {
-                tile.converged = true;
-            }
-            all &= tile.converged;
-        }
-        all
-    }
-
-    fn image_of(&self, halves: &[usize]) -> Image {
-        let crop = self.crop;
-        let mut image = Image::new(crop.width(), crop.height());
-        for tile in &self.tiles {
-            let scale = 1.0 / tile.samples_in(halves).max(1) as f64;
-            for (x, y, sum) in tile.pixels(halves) {
-                if crop.contains(x, y) {
-                    image.set(x - crop.x0, y - crop.y0, (sum * scale).as_vec3());
-                }
-            }
-        }
-        if self.splatting {
-            // One light path per pixel sample: N paths estimate the image
-            // as (pixel count / N) times the splats' sum.
-            let paths: u64 = halves.iter().map(|&h| self.light_paths[h]).sum();
-            let scale = self.full_pixels as f64 / paths.max(1) as f64;
-            for y in crop.y0..crop.y1 {
-                for x in crop.x0..crop.x1 {
-                    let k = (y * self.width + x) as usize;
-                    let sum: DVec3 = halves.iter().map(|&h| self.splat_sums[h][k]).sum();
-                    let p = image.get(x - crop.x0, y - crop.y0);
-                    image.set(x - crop.x0, y - crop.y0, p + (sum * scale).as_vec3());
-                }
-            }
-        }
-        image
-    }
-
-    fn stats(&self, stats: &mut RenderStats) {
-        // A splatting integrator's crop receives light from every traced
-        // tile, so all of them count; the path tracer's only its own.
-        let counted = self
-            .tiles
-            .iter()
-            .filter(|t| self.splatting || self.overlaps_crop(t));
-        stats.spp = counted.clone().map(Tile::spp).min().unwrap_or(0);
-        stats.max_spp = counted.clone().map(Tile::spp).max().unwrap_or(0);
-        stats.samples = counted
-            .clone()
-            .map(|t| t.spp() as u64 * t.pixel_count() as u64)
-            .sum();
-        stats.discarded = self.tiles.iter().map(|t| t.discarded).sum();
-    }
-
-    fn overlaps_crop(&self, t: &Tile) -> bool {
-        t.x0 < self.crop.x1 && t.x1 > self.crop.x0 && t.y0 < self.crop.y1 && t.y1 > self.crop.y0
-    }
 }
 
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Image, RenderStats)> {
