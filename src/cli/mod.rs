@@ -171,13 +171,16 @@ fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
     }
     let r = scene.bvh.report();
     println!(
-        "bvh:        4-wide, {} nodes, {} leaves, SAH cost {:.2} (binary {:.2}), {} bytes, built in {:.3} s",
+        "bvh:        4-wide, {} nodes, {} leaves, SAH cost {:.2} (binary {:.2}), {} bytes, {}",
         r.nodes,
         r.leaves,
         r.sah_cost,
         r.binary_sah_cost,
         scene.bvh.memory_bytes(),
-        scene.report.bvh_build_seconds
+        match scene.report.cache {
+            scene::cache::CacheUse::Hit => "from the scene cache".to_string(),
+            _ => format!("built in {:.3} s", scene.report.bvh_build_seconds),
+        }
     );
     let s = &scene.settings;
     let integrator = match s.integrator {

@@ -190,7 +190,11 @@ pub fn render_with(
         full_pixels,
     };
     let traced_pixels = traced.width() as u64 * traced.height() as u64;
-    let progress = Progress::new(options.progress, traced_pixels * settings.spp as u64);
+    let total = options
+        .target_noise
+        .is_none()
+        .then(|| traced_pixels * settings.spp as u64);
+    let progress = Progress::new(options.progress, total);
     let start = Instant::now();
     let deadline = settings.time_limit.map(Duration::from_secs_f32);
     let interrupted = || {

@@ -43,7 +43,7 @@ pub fn render_strategies(scene: &Scene, options: &RenderOptions) -> Result<Vec<S
     let (width, height) = (settings.width, settings.height);
     let pixels = width as usize * height as usize;
     let mut tiles = tiles::split(super::Crop::full(width, height));
-    let progress = Progress::new(options.progress, pixels as u64 * settings.spp as u64);
+    let progress = Progress::new(options.progress, Some(pixels as u64 * settings.spp as u64));
     let mut sums: BTreeMap<(u32, u32), Sums> = BTreeMap::new();
     let (mut spp, mut pass) = (0, 0);
     while spp < settings.spp {
