@@ -6,7 +6,11 @@
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// In a JSON sidecar the keys are the EXR attributes' names without the
+/// `tracer.` prefix (`sceneHash`, `maxSpp`, …); `samples` is a list of
+/// `[first, count]` pairs.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
 pub struct Metadata {
     /// `tracer` and its version.
     pub program: String,

@@ -297,7 +297,8 @@ impl Cache {
 fn max_size_from_env() -> Option<u64> {
     match std::env::var("TRACER_CACHE_MAX_SIZE") {
         Ok(v) if v == "0" || v.eq_ignore_ascii_case("none") => None,
-        Ok(v) => parse_size(&v).ok(),
+        // A value that does not parse keeps the default rather than no limit.
+        Ok(v) => Some(parse_size(&v).unwrap_or(DEFAULT_MAX_SIZE)),
         Err(_) => Some(DEFAULT_MAX_SIZE),
     }
 }
