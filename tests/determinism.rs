@@ -39,6 +39,40 @@ fn same_seed_same_image_for_any_thread_count() {
 }
 
 #[test]
+fn adaptive_renders_and_sample_offsets_are_the_same_for_any_thread_count() {
+    use tracer::scene::desc::IntegratorKind;
+    for integrator in [IntegratorKind::Pt, IntegratorKind::Bdpt, IntegratorKind::Lt] {
+        let mut scene = cornell(3);
+        scene.settings.integrator = integrator;
+        scene.settings.spp = 1 << 12;
+        let adaptive = integrator != IntegratorKind::Lt;
+        let results: Vec<_> = [1, 3]
+            .iter()
+            .map(|&threads| {
+                let options = RenderOptions {
+                    threads: Some(threads),
+                    sample_offset: 5,
+                    target_noise: Some(0.3),
+                    adaptive,
+                    ..RenderOptions::default()
+                };
+                render(&scene, &options).unwrap()
+            })
+            .collect();
+        let (a, b) = (&results[0], &results[1]);
+        assert!(
+            a.0 == b.0,
+            "{integrator:?}: the image depends on the thread count"
+        );
+        assert_eq!(
+            (a.1.spp, a.1.max_spp),
+            (b.1.spp, b.1.max_spp),
+            "{integrator:?}"
+        );
+    }
+}
+
+#[test]
 fn different_seeds_give_different_noise() {
     let a = render(&cornell(1), &RenderOptions::default()).unwrap().0;
     let b = render(&cornell(2), &RenderOptions::default()).unwrap().0;
