@@ -35,6 +35,9 @@ pub enum Error {
     /// A request the renderer cannot honour (e.g. an integrator not built yet).
     #[error("{0}")]
     Unsupported(String),
+    /// Ctrl-C or SIGTERM stopped work that cannot be kept in part.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 impl Error {

@@ -357,7 +357,13 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
         // As many samples as the main render took, whatever stopped it.
         let mut scene = scene;
         scene.settings.spp = stats.spp;
-        write_strategies(&scene, &options, dir)?;
+        match write_strategies(&scene, &options, dir) {
+            Err(Error::Interrupted) => {
+                eprintln!("interrupted: the strategy images were not written");
+                return Ok(INTERRUPTED_EXIT);
+            }
+            other => other?,
+        }
     }
     if let Some(w) = window.take() {
         eprintln!("showing the result: close the window (or press Ctrl-C) to exit");

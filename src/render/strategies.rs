@@ -49,6 +49,16 @@ pub fn render_strategies(scene: &Scene, options: &RenderOptions) -> Result<Vec<S
     while spp < settings.spp {
         let count = pass_size(pass).min(settings.spp - spp);
         for batch in tiles.chunks_mut(SPLAT_BATCH) {
+            // Every strategy image divides by one sample count: a render
+            // cut short cannot be normalised, so it is abandoned.
+            if options
+                .interrupt
+                .as_ref()
+                .is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
+            {
+                progress.finish();
+                return Err(crate::Error::Interrupted);
+            }
             let lists: Vec<_> = pool.install(|| {
                 batch
                     .par_iter_mut()
