@@ -2,7 +2,7 @@
 //! vector or a section of a read-only memory-mapped file. The scene cache
 //! maps its entries instead of copying them: on a warm load the triangles,
 //! shading records and BVH are used where the page cache already holds
-//! them (measured: a 136 MB entry loads in about a third of the time a copy
+//! them (measured: the dragon's 136 MiB entry loads in about a third of the time a copy
 //! into fresh vectors takes, whose page faults cost more than the copy).
 
 use bytemuck::Pod;

@@ -408,3 +408,21 @@ fn packets_match_single_rays() {
     let empty = WideBvh::build(&[]);
     assert!(empty.intersect_packet(&[Ray::new(Vec3::ZERO, Vec3::Z)])[0].is_none());
 }
+
+#[test]
+fn the_wide_bvh_bounds_are_exactly_the_triangles_bounds() {
+    // The scene takes its bounds from the BVH instead of a pass over the
+    // triangles, so the two must agree to the bit.
+    use tracer::geometry::Aabb;
+    for triangles in [
+        tracer::bench::meshes::displaced_sphere(4),
+        tracer::bench::meshes::city(9),
+        Vec::new(),
+    ] {
+        let union = triangles
+            .iter()
+            .fold(Aabb::EMPTY, |a, t| a.union(Aabb::from_points(&t.v)));
+        let bounds = tracer::bvh::WideBvh::build(&triangles).bounds();
+        assert_eq!((bounds.min, bounds.max), (union.min, union.max));
+    }
+}

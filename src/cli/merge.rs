@@ -187,7 +187,7 @@ fn merge(parts: &[Part]) -> Result<(Image, Metadata)> {
     }
     if counts.iter().any(|&c| c != counts[0]) {
         return Err(Error::Unsupported(
-            "the inputs give different pixels different sample ranges: merge crops of equal samples, or equal crops of disjoint samples".into(),
+            "the inputs give different pixels different sample counts: merge crops of equal samples, or equal crops of disjoint samples".into(),
         ));
     }
     let mut image = Image::new(w, h);

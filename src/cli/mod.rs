@@ -15,7 +15,6 @@ use crate::bench::{BenchOptions, RayKind};
 use crate::film::write::read_linear;
 use crate::light::Light;
 use crate::scene;
-use crate::scene::desc::IntegratorKind;
 use crate::{Error, Result};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -183,11 +182,7 @@ fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
         }
     );
     let s = &scene.settings;
-    let integrator = match s.integrator {
-        IntegratorKind::Pt => "pt",
-        IntegratorKind::Lt => "lt",
-        IntegratorKind::Bdpt => "bdpt",
-    };
+    let integrator = s.integrator.name();
     println!(
         "render:     {}x{}, {} spp, {}, max depth {}, seed {} -> {}",
         s.width,

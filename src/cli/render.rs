@@ -161,23 +161,9 @@ pub fn prepare(args: &RenderArgs) -> Result<(Scene, String)> {
             message: "unknown image format: use .exr, .pfm, .png or .tga".into(),
         });
     }
-    if let Some(c) = args.crop {
-        let s = &scene.settings;
-        if c.x1 > s.width || c.y1 > s.height {
-            return Err(Error::Unsupported(format!(
-                "--crop {},{},{},{} reaches outside the {}x{} image",
-                c.x0, c.y0, c.x1, c.y1, s.width, s.height
-            )));
-        }
-    }
     if args.bdpt_strategies.is_some() && (args.crop.is_some() || args.sample_offset > 0) {
         return Err(Error::Unsupported(
             "--bdpt-strategies renders the whole image from sample 0: it cannot be combined with --crop or --sample-offset".into(),
-        ));
-    }
-    if args.sample_offset.checked_add(scene.settings.spp).is_none() {
-        return Err(Error::Unsupported(
-            "--sample-offset plus the samples per pixel exceeds 2^32".into(),
         ));
     }
     Ok((scene, hash))
@@ -196,7 +182,7 @@ fn metadata(
     Metadata {
         program: program(),
         scene_hash: hash.to_string(),
-        integrator: integrator_name(s.integrator).into(),
+        integrator: s.integrator.name().into(),
         seed: s.seed,
         max_depth: s.max_depth,
         width: s.width,
@@ -217,14 +203,6 @@ fn metadata(
         .into(),
         noise: stats.noise,
         pixels_hash: None,
-    }
-}
-
-pub fn integrator_name(i: IntegratorKind) -> &'static str {
-    match i {
-        IntegratorKind::Pt => "pt",
-        IntegratorKind::Lt => "lt",
-        IntegratorKind::Bdpt => "bdpt",
     }
 }
 
@@ -280,6 +258,8 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
         interrupt: Some(interrupt.clone()),
         adaptive: args.adaptive,
     };
+    // Before a window opens or anything is written.
+    options.check(&scene.settings)?;
     let s = &scene.settings;
     let mut window = match (want_preview && preview::AVAILABLE)
         .then(|| preview::Preview::open(&scene, options.crop, interrupt.clone()))

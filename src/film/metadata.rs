@@ -26,8 +26,8 @@ pub struct Metadata {
     pub crop: [u32; 4],
     /// Samples per pixel (the fewest any pixel got).
     pub spp: u32,
-    /// The most any pixel got: above `spp` only when a render was
-    /// interrupted in the middle of a pass.
+    /// The most any pixel got: above `spp` when a render was interrupted
+    /// in the middle of a pass, or sampled adaptively.
     pub max_spp: u32,
     /// The sample indices every pixel holds, as (first, count) runs: one
     /// run for a render, several for a merge of renders with offsets.

@@ -11,6 +11,17 @@ use glam::DVec3;
 /// give too rough an estimate from 256 pixels.
 const MIN_ADAPTIVE_SPP: u32 = 16;
 
+/// The relative error estimate of each pixel of the crop, row-major.
+pub(super) struct NoiseMap {
+    pixels: Vec<f64>,
+    width: u32,
+}
+
+/// The image's mean relative error: what `--target-noise` compares.
+pub(super) fn mean_noise(map: &NoiseMap) -> f64 {
+    map.pixels.iter().sum::<f64>() / map.pixels.len().max(1) as f64
+}
+
 /// Everything a render has accumulated: the tiles' sums and, for the
 /// splatting integrators, the splats' sums over the whole image, each split
 /// into the two halves of even and odd sample indices.
@@ -36,18 +47,17 @@ impl Accumulation {
     /// full image, estimated from two independent halves. `None` until
     /// both halves have samples everywhere.
     pub fn noise(&self) -> Option<f64> {
-        self.noise_map()
-            .map(|(map, _)| map.iter().sum::<f64>() / map.len().max(1) as f64)
+        self.noise_map().as_ref().map(mean_noise)
     }
 
-    /// Each crop pixel's relative error estimate (row-major over the crop),
-    /// and the crop's width; `None` until both halves have samples everywhere.
-    fn noise_map(&self) -> Option<(Vec<f64>, u32)> {
+    /// Each crop pixel's relative error estimate; `None` until both halves
+    /// have samples everywhere.
+    pub(super) fn noise_map(&self) -> Option<NoiseMap> {
         if self.tiles.iter().any(|t| t.samples.contains(&0)) {
             return None;
         }
         let (a, b) = (self.image_of(&[0]), self.image_of(&[1]));
-        let map = a
+        let pixels = a
             .pixels
             .iter()
             .zip(&b.pixels)
@@ -56,40 +66,42 @@ impl Accumulation {
                 (a - b).abs() / (a + b + 0.01)
             })
             .collect();
-        Some((map, a.width))
+        Some(NoiseMap {
+            pixels,
+            width: a.width,
+        })
     }
 
     /// Each tile's mean noise over its pixels in the crop, in tile order
     /// (`None` for tiles outside a crop, traced only for their light paths).
     pub fn tile_noise(&self) -> Option<Vec<Option<f64>>> {
-        let (map, width) = self.noise_map()?;
+        self.noise_map().map(|map| self.tile_means(&map))
+    }
+
+    fn tile_means(&self, map: &NoiseMap) -> Vec<Option<f64>> {
         let crop = self.crop;
-        let noise = self
-            .tiles
+        self.tiles
             .iter()
             .map(|tile| {
                 let (mut sum, mut n) = (0.0, 0u32);
                 for y in tile.y0.max(crop.y0)..tile.y1.min(crop.y1) {
                     for x in tile.x0.max(crop.x0)..tile.x1.min(crop.x1) {
-                        sum += map[((y - crop.y0) * width + (x - crop.x0)) as usize];
+                        sum += map.pixels[((y - crop.y0) * map.width + (x - crop.x0)) as usize];
                         n += 1;
                     }
                 }
                 (n > 0).then(|| sum / n as f64)
             })
-            .collect();
-        Some(noise)
+            .collect()
     }
 
     /// Marks tiles whose own noise is below `target` as converged, so
     /// adaptive sampling gives them no more samples; true once every tile
     /// in the crop is.
-    pub(super) fn mark_converged(&mut self, target: f64) -> bool {
-        let Some(noise) = self.tile_noise() else {
-            return false;
-        };
+    pub(super) fn mark_converged(&mut self, map: &NoiseMap, target: f64) -> bool {
+        let means = self.tile_means(map);
         let mut all = true;
-        for (tile, noise) in self.tiles.iter_mut().zip(noise) {
+        for (tile, noise) in self.tiles.iter_mut().zip(means) {
             let Some(noise) = noise else { continue };
             if !tile.converged && tile.spp() >= MIN_ADAPTIVE_SPP && noise < target {
                 tile.converged = true;

@@ -102,7 +102,8 @@ pub struct RenderOptions {
 pub struct RenderStats {
     /// Samples taken per pixel; after an interruption, the fewest any pixel got.
     pub spp: u32,
-    /// The most any pixel got (differs from `spp` only after an interruption).
+    /// The most any pixel got (above `spp` after an interruption or an
+    /// adaptive render).
     pub max_spp: u32,
     pub samples: u64,
     /// Samples whose estimate was NaN or infinite, replaced by zero.
@@ -122,6 +123,37 @@ pub enum StopReason {
     TimeLimit,
     TargetNoise,
     Interrupted,
+}
+
+impl RenderOptions {
+    /// Whether these options can render `settings`: a crop inside the
+    /// image, sample indices that fit in 32 bits, adaptive sampling only
+    /// with a target and an integrator that has per-pixel samples.
+    pub fn check(&self, settings: &Settings) -> Result<()> {
+        let (width, height) = (settings.width, settings.height);
+        if let Some(c) = self.crop {
+            if c.x0 >= c.x1 || c.y0 >= c.y1 || c.x1 > width || c.y1 > height {
+                return Err(Error::Unsupported(format!(
+                    "crop {},{},{},{} is not a non-empty part of the {width}x{height} image",
+                    c.x0, c.y0, c.x1, c.y1
+                )));
+            }
+        }
+        if self.sample_offset.checked_add(settings.spp).is_none() {
+            return Err(Error::Unsupported(format!(
+                "sample offset {} plus {} samples per pixel exceeds 2^32",
+                self.sample_offset, settings.spp
+            )));
+        }
+        if self.adaptive
+            && (self.target_noise.is_none() || settings.integrator == IntegratorKind::Lt)
+        {
+            return Err(Error::Unsupported(
+                "adaptive sampling needs a target noise, and an integrator with per-pixel samples (pt or bdpt; a light path lands anywhere)".into(),
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl RenderStats {
@@ -159,22 +191,10 @@ pub fn render_with(
     let settings = &scene.settings;
     let pool = worker_pool(options.threads)?;
     let (width, height) = (settings.width, settings.height);
+    options.check(settings)?;
     let full = Crop::full(width, height);
     let crop = options.crop.unwrap_or(full);
-    if crop.x0 >= crop.x1 || crop.y0 >= crop.y1 || crop.x1 > width || crop.y1 > height {
-        return Err(Error::Unsupported(format!(
-            "crop {},{},{},{} is not a non-empty part of the {width}x{height} image",
-            crop.x0, crop.y0, crop.x1, crop.y1
-        )));
-    }
     let splatting = settings.integrator != IntegratorKind::Pt;
-    if options.adaptive
-        && (options.target_noise.is_none() || settings.integrator == IntegratorKind::Lt)
-    {
-        return Err(Error::Unsupported(
-            "adaptive sampling needs a target noise, and an integrator with per-pixel samples (pt or bdpt; a light path lands anywhere)".into(),
-        ));
-    }
     // Light paths land anywhere: a splatting integrator traces the paths of
     // every pixel, so that a crop's pixels receive all their light.
     let traced = if splatting { full } else { crop };
@@ -204,12 +224,6 @@ pub fn render_with(
             .is_some_and(|f| f.load(Ordering::Relaxed))
     };
     let past_deadline = || deadline.is_some_and(|d| start.elapsed() >= d);
-    if options.sample_offset.checked_add(settings.spp).is_none() {
-        return Err(Error::Unsupported(format!(
-            "sample offset {} plus {} samples per pixel exceeds 2^32",
-            options.sample_offset, settings.spp
-        )));
-    }
     let batch = if splatting {
         SPLAT_BATCH
     } else {
@@ -252,9 +266,9 @@ pub fn render_with(
                 }
                 if splatting {
                     let n = tile.pixel_count() as u64;
-                    let odd = (first..first + count).filter(|i| i % 2 == 1).count() as u64;
-                    acc.light_paths[1] += n * odd;
-                    acc.light_paths[0] += n * (count as u64 - odd);
+                    for (paths, k) in acc.light_paths.iter_mut().zip(tiles::halves(first, count)) {
+                        *paths += n * k as u64;
+                    }
                 }
             }
         }
@@ -265,11 +279,11 @@ pub fn render_with(
         // Two half images per pass: only worth it when noise decides.
         let mut converged = false;
         if let Some(target) = options.target_noise {
-            stats.noise = acc.noise();
-            converged = if options.adaptive {
-                acc.mark_converged(target)
-            } else {
-                stats.noise.is_some_and(|noise| noise < target)
+            let map = acc.noise_map();
+            stats.noise = map.as_ref().map(accumulation::mean_noise);
+            converged = match map {
+                Some(map) if options.adaptive => acc.mark_converged(&map, target),
+                _ => stats.noise.is_some_and(|noise| noise < target),
             };
         }
         let reason = if interrupted() {

@@ -46,9 +46,9 @@ impl Tile {
 
     /// Records that samples `first .. first + count` were added to every pixel.
     pub fn count_samples(&mut self, first: u32, count: u32) {
-        let odd = (first..first + count).filter(|i| i % 2 == 1).count() as u32;
+        let [even, odd] = halves(first, count);
+        self.samples[0] += even;
         self.samples[1] += odd;
-        self.samples[0] += count - odd;
     }
 
     /// Each pixel's sum over `halves` (both, or one), with (x, y) in image
@@ -67,6 +67,14 @@ impl Tile {
     pub fn samples_in(&self, halves: &[usize]) -> u32 {
         halves.iter().map(|&h| self.samples[h]).sum()
     }
+}
+
+/// How many of the sample indices `first .. first + count` are even, and
+/// how many odd: the two halves they go to.
+pub fn halves(first: u32, count: u32) -> [u32; 2] {
+    let (first, end) = (first as u64, first as u64 + count as u64);
+    let odd = (end / 2 - first / 2) as u32;
+    [count - odd, odd]
 }
 
 /// Covers `area` with tiles, in scanline order. Tiles start on multiples of
@@ -90,4 +98,21 @@ pub fn split(area: Crop) -> Vec<Tile> {
         }
     }
     tiles
+}
+
+#[cfg(test)]
+mod tests {
+    use super::halves;
+
+    #[test]
+    fn halves_count_even_and_odd_indices() {
+        for first in 0..9u32 {
+            for count in 0..9u32 {
+                let odd = (first..first + count).filter(|i| i % 2 == 1).count() as u32;
+                assert_eq!(halves(first, count), [count - odd, odd], "{first}+{count}");
+            }
+        }
+        assert_eq!(halves(u32::MAX - 1, 1), [1, 0]);
+        assert_eq!(halves(u32::MAX, 1), [0, 1]);
+    }
 }

@@ -218,6 +218,17 @@ pub enum IntegratorKind {
     Bdpt,
 }
 
+impl IntegratorKind {
+    /// The name the scene format and the command line use.
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Pt => "pt",
+            IntegratorKind::Lt => "lt",
+            IntegratorKind::Bdpt => "bdpt",
+        }
+    }
+}
+
 fn default_spp() -> Count {
     Count(16)
 }

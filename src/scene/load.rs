@@ -196,10 +196,8 @@ pub fn load_desc_cached(desc: SceneDesc, cache: Option<&Cache>) -> Result<Scene>
     warnings.append(&mut b.report.warnings);
     b.report.warnings = warnings;
 
-    let bounds = geometry
-        .triangles
-        .iter()
-        .fold(Aabb::EMPTY, |a, t| a.union(Aabb::from_points(&t.v)));
+    // The BVH's root box is the union of the triangles' boxes.
+    let bounds = geometry.bvh.bounds();
     let mut lights = Vec::new();
     for e in &geometry.emitters {
         lights.push(Light::Area(AreaLight::new(

@@ -63,7 +63,6 @@ pub struct SectionInfo {
 }
 
 pub struct Header {
-    pub version: u32,
     pub key: [u8; 32],
     pub payload_length: u64,
     pub checksum: [u8; 32],
@@ -206,7 +205,6 @@ pub fn read_header(file: &[u8]) -> Result<Header, Invalid> {
     let (offsets, end) = section_offsets(&sections)
         .ok_or_else(|| Invalid::Length("section lengths overflow".into()))?;
     let header = Header {
-        version,
         key: h[16..48].try_into().unwrap(),
         payload_length: u64::from_le_bytes(h[48..56].try_into().unwrap()),
         checksum: h[56..88].try_into().unwrap(),

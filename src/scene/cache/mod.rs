@@ -84,10 +84,6 @@ impl Cache {
         directories::ProjectDirs::from("", "", "tracer").map(|d| d.cache_dir().to_path_buf())
     }
 
-    pub fn dir(&self) -> &Path {
-        &self.dir
-    }
-
     pub fn entry_path(&self, key: &Key) -> PathBuf {
         self.dir.join(format!("{}.{EXTENSION}", hex(key)))
     }
@@ -209,13 +205,18 @@ impl Cache {
 
     /// Every entry, least recently used first; temporary files are skipped.
     pub fn list(&self) -> std::io::Result<Vec<EntryInfo>> {
+        let mut entries = self.scan()?;
+        for e in &mut entries {
+            e.scene = read_scene_name(&e.path).map_err(|e| e.to_string());
+        }
+        Ok(entries)
+    }
+
+    /// The entries' names, sizes and times alone (`scene` left unread),
+    /// least recently used first: all that pruning needs.
+    fn scan(&self) -> std::io::Result<Vec<EntryInfo>> {
         let mut entries = Vec::new();
-        let dir = match std::fs::read_dir(&self.dir) {
-            Ok(d) => d,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(entries),
-            Err(e) => return Err(e),
-        };
-        for item in dir {
+        for item in read_dir_or_empty(&self.dir)? {
             let item = item?;
             let path = item.path();
             if path.extension().and_then(|e| e.to_str()) != Some(EXTENSION) {
@@ -232,7 +233,7 @@ impl Cache {
                     .file_stem()
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_default(),
-                scene: read_scene_name(&path).map_err(|e| e.to_string()),
+                scene: Err("not read".into()),
                 bytes: meta.len(),
                 last_used: meta.modified().unwrap_or(SystemTime::UNIX_EPOCH),
                 path,
@@ -246,12 +247,7 @@ impl Cache {
     /// write; returns how many files and bytes went.
     pub fn clear(&self) -> std::io::Result<(usize, u64)> {
         let mut removed = (0, 0);
-        let dir = match std::fs::read_dir(&self.dir) {
-            Ok(d) => d,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(removed),
-            Err(e) => return Err(e),
-        };
-        for item in dir {
+        for item in read_dir_or_empty(&self.dir)? {
             let path = item?.path();
             let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
             let ours = name.ends_with(&format!(".{EXTENSION}")) || is_stale_temp(&path);
@@ -269,7 +265,7 @@ impl Cache {
     /// Removes least recently used entries until the rest fit in `max_bytes`;
     /// returns how many files and bytes went.
     pub fn prune(&self, max_bytes: u64) -> std::io::Result<(usize, u64)> {
-        let entries = self.list()?;
+        let entries = self.scan()?;
         let mut total: u64 = entries.iter().map(|e| e.bytes).sum();
         let mut removed = (0, 0);
         for e in entries {
@@ -313,6 +309,15 @@ fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
     #[cfg(not(unix))]
     {
         a.len() == b.len() && a.modified().ok() == b.modified().ok()
+    }
+}
+
+/// The folder's entries; none when the folder does not exist yet.
+fn read_dir_or_empty(dir: &Path) -> std::io::Result<Vec<std::io::Result<std::fs::DirEntry>>> {
+    match std::fs::read_dir(dir) {
+        Ok(d) => Ok(d.collect()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
+        Err(e) => Err(e),
     }
 }
 
