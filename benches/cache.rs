@@ -6,7 +6,9 @@
 //! - `cold`: the same with an empty cache, plus storing the entry;
 //! - `warm`: key, map and check the entry, trace one ray;
 //! - `load`: the entry lookup alone, in bytes per second (criterion's
-//!   throughput), which is the cache's load throughput.
+//!   throughput), which is the cache's load throughput;
+//! - `copy-instead`: what reading the entry into fresh memory and
+//!   checksumming it would cost, the design the map was chosen over.
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use std::io::Write;
@@ -117,6 +119,17 @@ fn benches(c: &mut Criterion) {
                 let g = cache.lookup(&key, 1, &mut warnings);
                 assert!(g.is_some(), "{warnings:?}");
                 g
+            })
+        });
+        // The design not taken: read the entry into freshly allocated
+        // memory (then it would be cast into the arrays) and checksum it.
+        let entry = cache.entry_path(&key);
+        group.bench_function("copy-instead", |b| {
+            b.iter(|| {
+                let bytes = std::fs::read(&entry).unwrap();
+                let mut h = blake3::Hasher::new();
+                h.update_rayon(&bytes);
+                (h.finalize(), bytes.len())
             })
         });
         group.finish();
