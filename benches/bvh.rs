@@ -41,12 +41,11 @@ fn obvhs_ray(r: &Ray) -> obvhs::ray::Ray {
     obvhs::ray::Ray::new(Vec3A::from(r.origin), Vec3A::from(r.dir), r.tmin, r.tmax)
 }
 
-fn bench_mesh(c: &mut Criterion, name: &str, tris: &[Triangle]) {
-    let mut group = c.benchmark_group(format!("bvh/{name}"));
-    group.sample_size(10);
-    group.measurement_time(Duration::from_secs(5));
-
-    // Build, one thread and two.
+/// BVH build: ours on one thread and two, obvhs's fast build.
+fn bench_build(
+    group: &mut criterion::BenchmarkGroup<criterion::measurement::WallTime>,
+    tris: &[Triangle],
+) {
     let sequential = BuildOptions {
         parallel: false,
         ..BuildOptions::default()
@@ -72,7 +71,16 @@ fn bench_mesh(c: &mut Criterion, name: &str, tris: &[Triangle]) {
             )
         })
     });
+}
 
+fn bench_mesh(c: &mut Criterion, name: &str, tris: &[Triangle]) {
+    let mut group = c.benchmark_group(format!("bvh/{name}"));
+    group.sample_size(10);
+    group.measurement_time(Duration::from_secs(5));
+
+    bench_build(&mut group, tris);
+    let otris = obvhs_triangles(tris);
+    let params = obvhs::BvhBuildParams::fast_build();
     let bvh = WideBvh::build(tris);
     let cwbvh =
         obvhs::cwbvh::builder::build_cwbvh_from_tris(&otris, params, &mut Duration::default());

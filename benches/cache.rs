@@ -15,9 +15,10 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use tracer::bvh::BuildOptions;
+use tracer::format::read_scene;
 use tracer::geometry::shapes;
 use tracer::scene::cache::{scene_key, Cache};
-use tracer::scene::{self, Scene};
+use tracer::scene::{build, Scene};
 
 /// A displaced icosphere of 20 · 4^8 = 1,310,720 triangles as OBJ, with
 /// vertices shared between faces as a scanned mesh has them.
@@ -57,9 +58,11 @@ fn write_scene(dir: &Path, mesh: &Path) -> PathBuf {
 /// Loads the scene and traces the camera's centre ray: the moment a render
 /// could begin.
 fn first_ray(path: &Path, cache: Option<&Cache>) -> Scene {
-    let scene = scene::load_cached(path, cache).unwrap();
-    let (w, h) = (scene.settings.width as f32, scene.settings.height as f32);
-    let ray = scene.camera.ray(0.5 * w, 0.5 * h);
+    let desc = read_scene(path).unwrap();
+    let scene = build(&desc, cache).unwrap();
+    let camera = desc.settings.camera().unwrap();
+    let (w, h) = (camera.width() as f32, camera.height() as f32);
+    let ray = camera.ray(0.5 * w, 0.5 * h);
     std::hint::black_box(scene.intersect(&ray));
     scene
 }
@@ -106,11 +109,7 @@ fn benches(c: &mut Criterion) {
             })
         });
 
-        let key = scene_key(
-            &scene::parse_file(&scene_path).unwrap(),
-            &BuildOptions::default(),
-        )
-        .unwrap();
+        let key = scene_key(&read_scene(&scene_path).unwrap(), &BuildOptions::default()).unwrap();
         let bytes = std::fs::metadata(cache.entry_path(&key)).unwrap().len();
         group.throughput(Throughput::Bytes(bytes));
         group.bench_function("load", |b| {

@@ -6,7 +6,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::time::Duration;
 use tracer::render::{render, RenderOptions};
-use tracer::scene::desc::IntegratorKind;
+use tracer::settings::IntegratorKind;
 
 fn benches(c: &mut Criterion) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -24,12 +24,16 @@ fn benches(c: &mut Criterion) {
             (IntegratorKind::Lt, "lt", 2),
             (IntegratorKind::Bdpt, "bdpt", 1),
         ] {
-            let mut scene = tracer::scene::load(&root.join(format!("scenes/{name}.json"))).unwrap();
-            scene.set_resolution(256, 256);
-            scene.settings.integrator = integrator;
-            scene.settings.spp = spp;
+            let (scene, mut settings) =
+                tracer::scene::load(&root.join(format!("scenes/{name}.json"))).unwrap();
+            settings.film.width = 256;
+            settings.film.height = 256;
+            settings.integrator = integrator;
+            settings.stop.spp = spp;
             group.throughput(Throughput::Elements(256 * 256 * spp as u64));
-            group.bench_function(label, |b| b.iter(|| render(&scene, &options).unwrap()));
+            group.bench_function(label, |b| {
+                b.iter(|| render(&scene, &settings, &options).unwrap())
+            });
         }
         group.finish();
     }

@@ -21,7 +21,7 @@ use tracer::bvh::WideBvh;
 use tracer::camera::Camera;
 use tracer::geometry::{Ray, Triangle};
 use tracer::render::{render, worker_pool, RenderOptions};
-use tracer::scene::desc::IntegratorKind;
+use tracer::settings::IntegratorKind;
 
 /// `city(129)`: 129² buildings of 12 triangles on a ground plane, 199,694 triangles.
 const CITY_BLOCKS: u32 = 129;
@@ -142,27 +142,29 @@ fn render_workload(name: &str, slowdown: f64) {
         Some("bdpt") => IntegratorKind::Bdpt,
         _ => unknown(name),
     };
-    let load = |size: u32| {
-        let mut scene = tracer::scene::load(std::path::Path::new(scene))
-            .unwrap_or_else(|e| panic!("cannot load {scene}: {e}"));
-        scene.set_resolution(size, size);
-        scene.settings.integrator = integrator;
-        scene.settings.spp = RENDER_SPP;
-        scene.settings.time_limit = None;
-        scene.settings.seed = 1;
-        scene
+    let (scene, mut settings) = tracer::scene::load(std::path::Path::new(scene))
+        .unwrap_or_else(|e| panic!("cannot load {scene}: {e}"));
+    settings.integrator = integrator;
+    settings.stop.spp = RENDER_SPP;
+    settings.stop.time_limit = None;
+    settings.seed = 1;
+    let at_size = |size: u32| {
+        let mut s = settings.clone();
+        s.film.width = size;
+        s.film.height = size;
+        s
     };
-    let full = load(RENDER_SIZE);
+    let full = at_size(RENDER_SIZE);
     let extra_size = (RENDER_SIZE as f64 * slowdown.sqrt()).round() as u32;
-    let extra = (extra_size > 0).then(|| load(extra_size));
+    let extra = (extra_size > 0).then(|| at_size(extra_size));
     let options = RenderOptions {
         threads: Some(1),
         progress: false,
         ..RenderOptions::default()
     };
     measured(|| {
-        for scene in std::iter::once(&full).chain(extra.as_ref()) {
-            black_box(render(scene, &options).expect("render"));
+        for settings in std::iter::once(&full).chain(extra.as_ref()) {
+            black_box(render(&scene, settings, &options).expect("render"));
         }
     });
 }

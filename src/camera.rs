@@ -7,8 +7,10 @@
 use crate::geometry::Ray;
 use glam::Vec3;
 
+/// A pinhole camera looking at an image of `width` × `height` pixels.
 #[derive(Clone, Debug)]
 pub struct Camera {
+    /// The pinhole, in world space: every camera ray starts here.
     pub position: Vec3,
     forward: Vec3,
     right: Vec3,
@@ -43,14 +45,17 @@ impl Camera {
         })
     }
 
+    /// Image width, in pixels.
     pub fn width(&self) -> u32 {
         self.width
     }
 
+    /// Image height, in pixels.
     pub fn height(&self) -> u32 {
         self.height
     }
 
+    /// Unit view direction: through the image's centre.
     pub fn forward(&self) -> Vec3 {
         self.forward
     }

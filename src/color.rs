@@ -17,10 +17,12 @@ pub fn average(c: Rgb) -> f32 {
     (c.x + c.y + c.z) / 3.0
 }
 
+/// Whether every channel is exactly zero.
 pub fn is_black(c: Rgb) -> bool {
     c.x == 0.0 && c.y == 0.0 && c.z == 0.0
 }
 
+/// Whether no channel is NaN or infinite.
 pub fn is_finite(c: Rgb) -> bool {
     c.x.is_finite() && c.y.is_finite() && c.z.is_finite()
 }

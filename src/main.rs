@@ -1,10 +1,12 @@
 //! `tracer`: parse the command line, call the library, report errors.
 
+mod cli;
+
 use clap::Parser;
 
 fn main() {
-    let cli = tracer::cli::Cli::parse();
-    match tracer::cli::run(cli) {
+    let cli = cli::Cli::parse();
+    match cli::run(cli) {
         Ok(status) => std::process::exit(status),
         Err(e) => {
             eprintln!("error: {e}");

@@ -9,6 +9,9 @@ use bytemuck::Pod;
 use std::ops::{Deref, DerefMut};
 use std::sync::Arc;
 
+/// A slice of plain records owned either as a vector or as part of a shared
+/// read-only file map; it derefs to `[T]`. Writing to a mapped array first
+/// copies it into a vector.
 pub struct PodArray<T: Pod> {
     /// Points into `owner`; cached so that indexing costs what a `Vec`'s
     /// does. Taken once, mutably, from the vector, and the only way its
@@ -28,6 +31,8 @@ enum Owner<T> {
 // read through `&self`, and writing goes through `DerefMut`, which first
 // turns a mapped array into an owned vector.
 unsafe impl<T: Pod + Send> Send for PodArray<T> {}
+// SAFETY: as for `Send`: shared access only reads, and the data it reads is
+// never changed while shared.
 unsafe impl<T: Pod + Sync> Sync for PodArray<T> {}
 
 impl<T: Pod> PodArray<T> {
@@ -51,6 +56,7 @@ impl<T: Pod> PodArray<T> {
         matches!(self.owner, Owner::Map(_))
     }
 
+    /// The records as a vector: the owned one, or a copy of the mapped ones.
     pub fn into_vec(self) -> Vec<T> {
         match self.owner {
             Owner::Vec(v) => v,

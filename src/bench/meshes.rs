@@ -79,7 +79,7 @@ fn boxed(tris: &mut Vec<Triangle>, lo: Vec3, hi: Vec3) {
 
 /// The triangles of an OBJ file, all groups together.
 pub fn obj_triangles(path: &std::path::Path) -> Result<Vec<Triangle>, String> {
-    let obj = crate::scene::obj::load_obj(path, None)?;
+    let obj = crate::format::obj::load_obj(path, None)?;
     Ok(obj
         .groups
         .iter()

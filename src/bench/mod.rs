@@ -16,17 +16,47 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Which generated ray sets to trace.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RayKind {
+    /// One ray through the centre of each pixel of a 1024 × 1024 image, from
+    /// the scene's camera (or one framing the mesh).
     Primary,
+    /// A cosine-distributed ray from each primary hit.
     Diffuse,
+    /// Origins uniform in the scene's bounds, directions uniform on the sphere.
     Incoherent,
+    /// From each primary hit to a random point in the bounds (any-hit queries).
     Shadow,
+    /// Every set above.
     All,
 }
 
+impl RayKind {
+    /// Every kind, in the order the command line lists them.
+    pub const ALL: [RayKind; 5] = [
+        RayKind::Primary,
+        RayKind::Diffuse,
+        RayKind::Incoherent,
+        RayKind::Shadow,
+        RayKind::All,
+    ];
+
+    /// The name the command line uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            RayKind::Primary => "primary",
+            RayKind::Diffuse => "diffuse",
+            RayKind::Incoherent => "incoherent",
+            RayKind::Shadow => "shadow",
+            RayKind::All => "all",
+        }
+    }
+}
+
+/// What `tracer bench` measures, and how often.
 pub struct BenchOptions {
+    /// Generated ray sets to trace; ignored when `rays_file` is given.
     pub kinds: Vec<RayKind>,
     /// Trace these rays instead of generated ones.
     pub rays_file: Option<PathBuf>,
@@ -38,37 +68,59 @@ pub struct BenchOptions {
     pub save_rays: Option<PathBuf>,
 }
 
+/// One timed BVH build.
 #[derive(Debug, Serialize)]
 pub struct BuildFigures {
+    /// Threads in the pool it ran in (one builds sequentially).
     pub threads: usize,
+    /// Median wall-clock build time, in seconds.
     pub seconds: f64,
 }
 
+/// One timed query over one ray set.
 #[derive(Debug, Serialize)]
 pub struct TraceFigures {
+    /// The ray set: `primary`, `diffuse`, `incoherent`, `shadow`, or a rays
+    /// file's name without extension.
     pub rays: String,
     /// `closest`, `packet` (closest hits, eight rays at a time) or `any`.
     pub query: &'static str,
+    /// Threads in the pool it ran in.
     pub threads: usize,
+    /// Rays in the set.
     pub count: usize,
+    /// Millions of rays per second, from the median run.
     pub mrays_per_second: f64,
+    /// Rays that hit something (closest and packet) or were occluded (any).
     pub hits: usize,
     /// Sum of closest-hit distances (closest-hit queries only), to check
     /// two implementations against each other.
     pub distance_sum: f64,
 }
 
+/// What `tracer bench` measured: printed by [`BenchReport::table`], or
+/// written as JSON.
 #[derive(Debug, Serialize)]
 pub struct BenchReport {
+    /// The mesh or scene file, as given.
     pub input: String,
+    /// Triangles built over and traced.
     pub triangles: usize,
+    /// One build per thread count asked for.
     pub builds: Vec<BuildFigures>,
+    /// SAH cost of the 4-wide BVH (see [`crate::bvh::wide::BuildReport`]).
     pub sah_cost: f32,
+    /// SAH cost of the binary BVH before the collapse.
     pub binary_sah_cost: f32,
+    /// 4-wide inner nodes.
     pub nodes: usize,
+    /// Leaf blocks (up to four triangles each).
     pub leaves: usize,
+    /// Bytes of nodes and leaf blocks.
     pub memory_bytes: usize,
+    /// `memory_bytes` / `triangles`.
     pub bytes_per_triangle: f64,
+    /// Every measurement: for each ray set, each thread count and query.
     pub traces: Vec<TraceFigures>,
 }
 
@@ -78,14 +130,16 @@ fn load(path: &Path) -> Result<(Vec<Triangle>, Option<Camera>)> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     if is_obj {
-        Ok((
-            meshes::obj_triangles(path).map_err(Error::Unsupported)?,
-            None,
-        ))
+        let triangles = meshes::obj_triangles(path).map_err(|message| Error::Data {
+            path: path.to_path_buf(),
+            message,
+        })?;
+        Ok((triangles, None))
     } else {
-        let mut scene = crate::scene::load(path)?;
-        scene.set_resolution(rays::PRIMARY_RESOLUTION, rays::PRIMARY_RESOLUTION);
-        Ok((scene.triangles.into_vec(), Some(scene.camera)))
+        let (scene, mut settings) = crate::scene::load(path)?;
+        settings.film.width = rays::PRIMARY_RESOLUTION;
+        settings.film.height = rays::PRIMARY_RESOLUTION;
+        Ok((scene.triangles.into_vec(), settings.camera()))
     }
 }
 
@@ -141,6 +195,8 @@ fn trace_any(bvh: &WideBvh, rays: &[Ray]) -> usize {
         .sum()
 }
 
+/// Loads the OBJ mesh or scene file at `path` (an OBJ by its extension),
+/// builds its BVH and times builds and ray queries as `options` ask.
 pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
     let (triangles, camera) = load(path)?;
     let mut builds = Vec::new();

@@ -65,10 +65,13 @@ pub fn primary(camera: &Camera) -> Vec<Ray> {
 /// facing the primary ray.
 #[derive(Clone, Copy, Debug)]
 pub struct HitPoint {
+    /// The hit point, moved off the surface to the side the primary ray came from.
     pub origin: Vec3,
+    /// Unit geometric normal, facing the primary ray.
     pub normal: Vec3,
 }
 
+/// Where each of the `primary` rays hit, in ray order; misses are skipped.
 pub fn hit_points(bvh: &WideBvh, triangles: &[Triangle], primary: &[Ray]) -> Vec<HitPoint> {
     primary
         .iter()
@@ -127,11 +130,13 @@ pub fn shadow(hits: &[HitPoint], bounds: Aabb) -> Vec<Ray> {
 pub fn read_file(path: &Path) -> Result<Vec<Ray>> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     if bytes.len() % RECORD_BYTES != 0 {
-        return Err(Error::Unsupported(format!(
-            "{}: {} bytes is not a whole number of {RECORD_BYTES}-byte ray records",
-            path.display(),
-            bytes.len()
-        )));
+        return Err(Error::Data {
+            path: path.to_path_buf(),
+            message: format!(
+                "{} bytes is not a whole number of {RECORD_BYTES}-byte ray records",
+                bytes.len()
+            ),
+        });
     }
     Ok(bytes
         .chunks_exact(RECORD_BYTES)

@@ -14,6 +14,7 @@ use crate::geometry::{Aabb, Triangle};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
+/// How the binned SAH build splits.
 #[derive(Clone, Debug)]
 pub struct BuildOptions {
     /// Bins per axis (2 to 16). 16 is within a few per cent of a full sweep's
@@ -186,6 +187,7 @@ impl Binner {
 }
 
 impl Bvh {
+    /// Builds over `triangles` with `options`; hits report indices into this slice.
     pub fn build_with(triangles: &[Triangle], options: &BuildOptions) -> Bvh {
         let (nodes, original_index) = build_tree(triangles, options);
         Bvh {

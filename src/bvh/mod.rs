@@ -14,8 +14,10 @@ pub use wide::WideBvh;
 
 use crate::geometry::{Aabb, Triangle};
 
+/// A node of the binary BVH: a leaf when `count > 0`, else an inner node.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Node {
+    /// Box around every triangle below the node.
     pub bounds: Aabb,
     /// Inner node: index of the first of its two adjacent children.
     /// Leaf: index of its first triangle in leaf order.
@@ -25,6 +27,7 @@ pub struct Node {
 }
 
 impl Node {
+    /// Whether the node holds triangles rather than children.
     pub fn is_leaf(&self) -> bool {
         self.count > 0
     }
@@ -33,12 +36,19 @@ impl Node {
 /// A closest hit: the caller's triangle index, distance and barycentrics.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
+    /// The caller's index of the triangle hit.
     pub triangle: u32,
+    /// Ray parameter of the hit: a distance when the ray direction is unit length.
     pub t: f32,
+    /// Barycentric weight of the triangle's vertex 1.
     pub b1: f32,
+    /// Barycentric weight of vertex 2 (vertex 0's is `1 - b1 - b2`).
     pub b2: f32,
 }
 
+/// A binary SAH BVH with its own copy of the triangles, in leaf order.
+/// The integrators trace [`WideBvh`], collapsed from the same build; this
+/// one serves as a reference in tests.
 pub struct Bvh {
     nodes: Vec<Node>,
     /// Triangles in leaf order.
@@ -49,21 +59,27 @@ pub struct Bvh {
 
 /// Traversal and intersection costs the SAH weighs, relative to each other.
 pub const TRAVERSAL_COST: f32 = 1.0;
+/// Cost of one ray–triangle test, relative to [`TRAVERSAL_COST`].
 pub const INTERSECTION_COST: f32 = 1.0;
 
 impl Bvh {
+    /// Builds over `triangles` with the default [`BuildOptions`]; hits report
+    /// indices into this slice.
     pub fn build(triangles: &[Triangle]) -> Bvh {
         Bvh::build_with(triangles, &BuildOptions::default())
     }
 
+    /// The nodes, root first; an inner node's two children are adjacent.
     pub fn nodes(&self) -> &[Node] {
         &self.nodes
     }
 
+    /// Number of triangles built over.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }
 
+    /// Box around every triangle; [`Aabb::EMPTY`] when there are none.
     pub fn bounds(&self) -> Aabb {
         self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds)
     }
@@ -73,10 +89,12 @@ impl Bvh {
         sah_cost(&self.nodes)
     }
 
+    /// Number of leaves.
     pub fn leaf_count(&self) -> usize {
         self.nodes.iter().filter(|n| n.is_leaf()).count()
     }
 
+    /// Bytes of nodes, triangles and index map (the heap the BVH uses).
     pub fn memory_bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node>()
             + self.triangles.len() * (std::mem::size_of::<Triangle>() + 4)

@@ -1,10 +1,11 @@
 //! `tracer cache`: list, clear and prune the scene cache; the cache flags
 //! of `render` and `info`.
 
-use crate::scene::cache::Cache;
-use crate::{Error, Result};
 use clap::{Args, Subcommand};
 use std::path::PathBuf;
+use tracer::error::human_bytes;
+use tracer::scene::cache::Cache;
+use tracer::{Error, Result};
 
 #[derive(Subcommand, Debug)]
 pub enum CacheCommand {
@@ -15,7 +16,7 @@ pub enum CacheCommand {
     /// Remove least recently used entries until the rest fit in a size.
     Prune {
         /// e.g. 2G, 500M (binary multiples).
-        #[arg(long, value_parser = crate::scene::cache::parse_size)]
+        #[arg(long, value_parser = tracer::scene::cache::parse_size)]
         max_size: u64,
     },
 }
@@ -45,9 +46,7 @@ impl CacheArgs {
 }
 
 pub fn run_cache(action: &CacheCommand, dir: Option<PathBuf>) -> Result<()> {
-    let dir = dir.or_else(Cache::default_dir).ok_or_else(|| {
-        Error::Unsupported("no cache folder: pass --cache-dir or set TRACER_CACHE_DIR".into())
-    })?;
+    let dir = dir.or_else(Cache::default_dir).ok_or(Error::NoCacheDir)?;
     let cache = Cache::new(&dir);
     let io = |e| Error::io(&dir, e);
     match action {
@@ -88,21 +87,6 @@ pub fn run_cache(action: &CacheCommand, dir: Option<PathBuf>) -> Result<()> {
         }
     }
     Ok(())
-}
-
-fn human_bytes(n: u64) -> String {
-    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
-    let mut x = n as f64;
-    let mut unit = 0;
-    while x >= 1024.0 && unit < UNITS.len() - 1 {
-        x /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{n} B")
-    } else {
-        format!("{x:.1} {}", UNITS[unit])
-    }
 }
 
 fn human_age(d: std::time::Duration) -> String {

@@ -4,14 +4,15 @@
 //! it, weighted by their samples per pixel, which is exactly the estimate
 //! one render of all those samples makes.
 
-use crate::film::metadata::{normalize_runs, program, runs_overlap, Metadata};
-use crate::film::write::{read_with_metadata, write_image_with};
-use crate::film::Image;
-use crate::scene::desc::Tonemap;
-use crate::{Error, Result};
 use clap::Args;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
+use tracer::film::metadata::{normalize_runs, program, runs_overlap, Metadata};
+use tracer::film::read::read_with_metadata;
+use tracer::film::tonemap::Tonemap;
+use tracer::film::write::write_image_with;
+use tracer::film::Image;
+use tracer::{Error, Result};
 
 #[derive(Args, Debug)]
 pub struct MergeArgs {
@@ -64,106 +65,9 @@ fn merge(parts: &[Part]) -> Result<(Image, Metadata)> {
     let first = &parts[0];
     let m0 = &first.meta;
     for p in parts {
-        let m = &p.meta;
-        let differs = |what: &str, a: String, b: String| {
-            refuse(
-                &p.path,
-                format!(
-                    "{what} is {a}, but {} has {b}: not parts of the same render",
-                    first.path.display()
-                ),
-            )
-        };
-        if m.scene_hash != m0.scene_hash {
-            return Err(differs(
-                "the scene",
-                m.scene_hash.clone(),
-                m0.scene_hash.clone(),
-            ));
-        }
-        for (what, a, b) in [
-            (
-                "the integrator",
-                m.integrator.clone(),
-                m0.integrator.clone(),
-            ),
-            ("the seed", m.seed.to_string(), m0.seed.to_string()),
-            (
-                "the maximum depth",
-                m.max_depth.to_string(),
-                m0.max_depth.to_string(),
-            ),
-            (
-                "the image size",
-                format!("{}x{}", m.width, m.height),
-                format!("{}x{}", m0.width, m0.height),
-            ),
-            ("the program", m.program.clone(), m0.program.clone()),
-        ] {
-            if a != b {
-                return Err(differs(what, a, b));
-            }
-        }
-        if m.scene_hash.len() != 64 {
-            return Err(refuse(
-                &p.path,
-                format!(
-                    "has no scene hash ({:?}): nothing to check it against",
-                    m.scene_hash
-                ),
-            ));
-        }
-        if p.image.pixels.iter().any(|c| !c.is_finite()) {
-            return Err(refuse(&p.path, "holds NaN or infinite pixels".into()));
-        }
-        if m.max_spp != m.spp {
-            return Err(refuse(
-                &p.path,
-                format!(
-                    "holds {} to {} samples per pixel (an interrupted or adaptive render): its pixels cannot be weighted alike",
-                    m.spp, m.max_spp
-                ),
-            ));
-        }
-        let [x0, y0, x1, y1] = m.crop;
-        let (cw, ch) = (x1.saturating_sub(x0), y1.saturating_sub(y0));
-        if x1 > m.width || y1 > m.height || (cw, ch) != (p.image.width, p.image.height) {
-            return Err(refuse(
-                &p.path,
-                format!(
-                    "is {}x{}, but its metadata says crop {x0},{y0},{x1},{y1} of {}x{}",
-                    p.image.width, p.image.height, m.width, m.height
-                ),
-            ));
-        }
-        let ranges: u32 = m.samples.iter().map(|r| r.1).sum();
-        if ranges != m.spp || m.spp == 0 {
-            return Err(refuse(
-                &p.path,
-                format!(
-                    "holds {} samples per pixel but sample ranges of {ranges}",
-                    m.spp
-                ),
-            ));
-        }
+        check_part(p, first)?;
     }
-    // The same sample of the same pixel twice would count it double.
-    for (i, a) in parts.iter().enumerate() {
-        for b in &parts[i + 1..] {
-            if crops_overlap(a.meta.crop, b.meta.crop)
-                && runs_overlap(&a.meta.samples, &b.meta.samples)
-            {
-                return Err(refuse(
-                    &b.path,
-                    format!(
-                        "holds some of the same samples of the same pixels as {} (give each process its own --sample-offset)",
-                        a.path.display()
-                    ),
-                ));
-            }
-        }
-    }
-
+    check_disjoint(parts)?;
     let (w, h) = (m0.width, m0.height);
     let mut sums = vec![DVec3::ZERO; w as usize * h as usize];
     let mut counts = vec![0u64; w as usize * h as usize];
@@ -179,14 +83,14 @@ fn merge(parts: &[Part]) -> Result<(Image, Metadata)> {
         }
     }
     if let Some(k) = counts.iter().position(|&c| c == 0) {
-        return Err(Error::Unsupported(format!(
+        return Err(Error::Merge(format!(
             "the inputs leave pixel ({}, {}) uncovered: merge needs crops that cover the {w}x{h} image",
             k as u32 % w,
             k as u32 / w
         )));
     }
     if counts.iter().any(|&c| c != counts[0]) {
-        return Err(Error::Unsupported(
+        return Err(Error::Merge(
             "the inputs give different pixels different sample counts: merge crops of equal samples, or equal crops of disjoint samples".into(),
         ));
     }
@@ -214,6 +118,116 @@ fn merge(parts: &[Part]) -> Result<(Image, Metadata)> {
         ..m0.clone()
     };
     Ok((image, meta))
+}
+
+/// Refuses a part that is not of the same render as `first`, or whose
+/// metadata does not describe its own pixels.
+fn check_part(p: &Part, first: &Part) -> Result<()> {
+    let m0 = &first.meta;
+    let m = &p.meta;
+    let differs = |what: &str, a: String, b: String| {
+        refuse(
+            &p.path,
+            format!(
+                "{what} is {a}, but {} has {b}: not parts of the same render",
+                first.path.display()
+            ),
+        )
+    };
+    if m.scene_hash != m0.scene_hash {
+        return Err(differs(
+            "the scene",
+            m.scene_hash.clone(),
+            m0.scene_hash.clone(),
+        ));
+    }
+    for (what, a, b) in [
+        (
+            "the integrator",
+            m.integrator.clone(),
+            m0.integrator.clone(),
+        ),
+        ("the seed", m.seed.to_string(), m0.seed.to_string()),
+        (
+            "the maximum depth",
+            m.max_depth.to_string(),
+            m0.max_depth.to_string(),
+        ),
+        (
+            "the image size",
+            format!("{}x{}", m.width, m.height),
+            format!("{}x{}", m0.width, m0.height),
+        ),
+        ("the program", m.program.clone(), m0.program.clone()),
+    ] {
+        if a != b {
+            return Err(differs(what, a, b));
+        }
+    }
+    if m.scene_hash.len() != 64 {
+        return Err(refuse(
+            &p.path,
+            format!(
+                "has no scene hash ({:?}): nothing to check it against",
+                m.scene_hash
+            ),
+        ));
+    }
+    if p.image.pixels.iter().any(|c| !c.is_finite()) {
+        return Err(refuse(&p.path, "holds NaN or infinite pixels".into()));
+    }
+    if m.max_spp != m.spp {
+        return Err(refuse(
+            &p.path,
+            format!(
+                "holds {} to {} samples per pixel (an interrupted or adaptive render): its pixels cannot be weighted alike",
+                m.spp, m.max_spp
+            ),
+        ));
+    }
+    let [x0, y0, x1, y1] = m.crop;
+    let (cw, ch) = (x1.saturating_sub(x0), y1.saturating_sub(y0));
+    if x1 > m.width || y1 > m.height || (cw, ch) != (p.image.width, p.image.height) {
+        return Err(refuse(
+            &p.path,
+            format!(
+                "is {}x{}, but its metadata says crop {x0},{y0},{x1},{y1} of {}x{}",
+                p.image.width, p.image.height, m.width, m.height
+            ),
+        ));
+    }
+    let ranges: u32 = m.samples.iter().map(|r| r.1).sum();
+    if ranges != m.spp || m.spp == 0 {
+        return Err(refuse(
+            &p.path,
+            format!(
+                "holds {} samples per pixel but sample ranges of {ranges}",
+                m.spp
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses parts that share samples of the same pixels.
+fn check_disjoint(parts: &[Part]) -> Result<()> {
+    // The same sample of the same pixel twice would count it double.
+    for (i, a) in parts.iter().enumerate() {
+        for b in &parts[i + 1..] {
+            if crops_overlap(a.meta.crop, b.meta.crop)
+                && runs_overlap(&a.meta.samples, &b.meta.samples)
+            {
+                return Err(refuse(
+                    &b.path,
+                    format!(
+                        "holds some of the same samples of the same pixels as {} (give each process its own --sample-offset)",
+                        a.path.display()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 fn crops_overlap(a: [u32; 4], b: [u32; 4]) -> bool {

@@ -2,21 +2,23 @@
 //! interruption, and the report.
 
 use super::cache::CacheArgs;
-use super::signals::{interrupt_flag, INTERRUPTED_EXIT};
-use crate::film::metadata::{program, Metadata};
-use crate::film::write::{write_image, write_image_with, ImageFormat};
-use crate::preview;
-use crate::render::{
-    render_strategies, render_with, Crop, RenderOptions, RenderStats, StopReason,
-    MAX_STRATEGY_LENGTH,
-};
-use crate::scene::cache::{hex, scene_hash, CacheUse};
-use crate::scene::desc::{Display, IntegratorKind, Tonemap};
-use crate::scene::{self, Scene};
-use crate::{Error, Result};
+use super::one_of;
+use super::preview;
+use super::signals::{interrupt_flag, report_vanished_cache_entries, INTERRUPTED_EXIT};
 use clap::Args;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
+use tracer::film::metadata::{program, Metadata};
+use tracer::film::tonemap::Tonemap;
+use tracer::film::write::{check_writable, write_image, write_image_with, ImageFormat};
+use tracer::format::read_scene;
+use tracer::render::{
+    render_strategies, render_with, RenderOptions, RenderStats, StopReason, MAX_STRATEGY_LENGTH,
+};
+use tracer::scene::cache::{hex, scene_hash, CacheUse};
+use tracer::scene::{build, Scene};
+use tracer::settings::{Crop, Display, IntegratorKind, Setting, Settings};
+use tracer::{Error, Result};
 
 /// Flags override the scene's `film` and `render` blocks.
 #[derive(Args, Debug, Default)]
@@ -26,14 +28,14 @@ pub struct RenderArgs {
     /// Output image; the format follows the extension (.exr, .pfm, .png, .tga).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = one_of(&IntegratorKind::ALL, IntegratorKind::name))]
     pub integrator: Option<IntegratorKind>,
     /// Samples per pixel (at most 2^31 - 1).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i32::MAX as i64))]
     pub spp: Option<u32>,
     /// Stop once this many seconds have passed (within one tile's work).
     #[arg(long, value_parser = positive_seconds)]
-    pub time_limit: Option<f32>,
+    pub time_limit: Option<f64>,
     /// Maximum number of path segments.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub max_depth: Option<u32>,
@@ -57,7 +59,7 @@ pub struct RenderArgs {
     /// Write the image so far after a pass at most this often (the first
     /// pass is always written).
     #[arg(long, value_name = "SECONDS", value_parser = positive_seconds, default_value_t = 10.0)]
-    pub checkpoint: f32,
+    pub checkpoint: f64,
     /// Stop once the estimated mean relative error per pixel falls below
     /// this (e.g. 0.02); the scene's spp no longer caps the render, --spp does.
     #[arg(long, value_name = "X", value_parser = positive_fraction)]
@@ -74,6 +76,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 0,
           value_parser = clap::value_parser!(u32).range(0..=i32::MAX as i64))]
     pub sample_offset: u32,
+    /// Refuse scenes estimated to need more than this much memory (e.g.
+    /// `48G`; default: the memory available when the render starts).
+    #[arg(long, value_name = "SIZE", value_parser = tracer::scene::cache::parse_size)]
+    pub memory_limit: Option<u64>,
     /// Show the image in a window as it refines (needs a build with
     /// `--features preview`).
     #[arg(long)]
@@ -82,8 +88,10 @@ pub struct RenderArgs {
     pub cache: CacheArgs,
 }
 
-fn positive_seconds(s: &str) -> std::result::Result<f32, String> {
-    match s.parse::<f32>() {
+/// Any finite positive number of seconds; one too large for the clock
+/// means no limit.
+fn positive_seconds(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
         Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
         _ => Err(format!(
             "expected a positive number of seconds, found {s:?}"
@@ -116,31 +124,82 @@ fn parse_crop(s: &str) -> std::result::Result<Crop, String> {
 /// The most samples per pixel a render stopped by noise may take.
 const UNCAPPED_SPP: u32 = 1 << 30;
 
-/// Loads the scene and applies the command-line overrides; also returns the
-/// scene's hash for the output's metadata.
-pub fn prepare(args: &RenderArgs) -> Result<(Scene, String)> {
-    let desc = scene::parse_file(&args.scene)?;
+/// Reads the scene, applies the command-line overrides to its settings,
+/// checks them (before any geometry is built), and builds the scene. Also
+/// returns the scene's hash for the output's metadata.
+pub fn prepare(args: &RenderArgs) -> Result<(Scene, Settings, String)> {
+    let mut desc = read_scene(&args.scene)?;
+    apply_overrides(&mut desc.settings, args);
+    let settings = &desc.settings;
+    settings.check().map_err(|e| {
+        let flag = match e.setting {
+            Setting::ImageSize => "--width/--height: ",
+            Setting::Crop => "--crop: ",
+            Setting::SampleRange => "--sample-offset: ",
+            Setting::Adaptive => "--adaptive: ",
+            Setting::Fov | Setting::Camera => "",
+        };
+        Error::Settings(format!("{flag}{}", e.message))
+    })?;
+    tracer::render::check(settings)?;
+    if ImageFormat::from_path(&settings.film.output).is_none() {
+        return Err(Error::Image {
+            path: settings.film.output.clone(),
+            message: "unknown image format: use .exr, .pfm, .png or .tga".into(),
+        });
+    }
+    refuse_overwriting_scene(&args.scene, &settings.film.output)?;
+    // Before any work: an output that cannot be written is found now, not
+    // after the render.
+    check_writable(&settings.film.output)?;
+    if args.bdpt_strategies.is_some() && (args.crop.is_some() || args.sample_offset > 0) {
+        return Err(Error::Settings(
+            "--bdpt-strategies renders the whole image from sample 0: it cannot be combined with --crop or --sample-offset".into(),
+        ));
+    }
+    tracer::scene::estimate::check(&desc, args.memory_limit)?;
     let hash = scene_hash(&desc);
-    let mut scene = scene::load_desc_cached(desc, args.cache.cache().as_ref())?;
-    // Only a mesh that cannot be read leaves no hash, and then the load fails first.
-    let hash = hash
-        .map(|k| hex(&k))
-        .ok_or_else(|| Error::Unsupported(format!("cannot hash {}", args.scene.display())))?;
-    let s = &mut scene.settings;
+    let scene = build(&desc, args.cache.cache().as_ref())?;
+    // Only a mesh that cannot be read leaves no hash, and then the build fails first.
+    let hash = hash.map(|k| hex(&k)).ok_or_else(|| Error::Data {
+        path: args.scene.clone(),
+        message: "cannot hash the scene's files".into(),
+    })?;
+    Ok((scene, desc.settings, hash))
+}
+
+/// Refuses an output that is the scene file itself (`-o scene.png` run on
+/// a scene named so): the render would replace what the user wrote.
+fn refuse_overwriting_scene(scene: &Path, output: &Path) -> Result<()> {
+    let same = |a: &Path, b: &Path| match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if same(scene, output) {
+        return Err(Error::Settings(format!(
+            "the output {} is the scene file itself: choose another output",
+            output.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Flags override the scene's `film` and `render` blocks.
+fn apply_overrides(s: &mut Settings, args: &RenderArgs) {
     if let Some(o) = &args.output {
-        s.output = o.clone();
+        s.film.output = o.clone();
     }
     if let Some(i) = args.integrator {
         s.integrator = i;
     }
     if args.target_noise.is_some() {
-        s.spp = UNCAPPED_SPP;
+        s.stop.spp = UNCAPPED_SPP;
     }
     if let Some(n) = args.spp {
-        s.spp = n;
+        s.stop.spp = n;
     }
     if let Some(t) = args.time_limit {
-        s.time_limit = Some(t);
+        s.stop.time_limit = Some(t);
     }
     if let Some(d) = args.max_depth {
         s.max_depth = d;
@@ -148,49 +207,33 @@ pub fn prepare(args: &RenderArgs) -> Result<(Scene, String)> {
     if let Some(seed) = args.seed {
         s.seed = seed;
     }
-    if args.width.is_some() || args.height.is_some() {
-        let (w, h) = (
-            args.width.unwrap_or(s.width),
-            args.height.unwrap_or(s.height),
-        );
-        scene.set_resolution(w, h);
+    if let Some(w) = args.width {
+        s.film.width = w;
     }
-    if ImageFormat::from_path(&scene.settings.output).is_none() {
-        return Err(Error::Image {
-            path: scene.settings.output.clone(),
-            message: "unknown image format: use .exr, .pfm, .png or .tga".into(),
-        });
+    if let Some(h) = args.height {
+        s.film.height = h;
     }
-    if args.bdpt_strategies.is_some() && (args.crop.is_some() || args.sample_offset > 0) {
-        return Err(Error::Unsupported(
-            "--bdpt-strategies renders the whole image from sample 0: it cannot be combined with --crop or --sample-offset".into(),
-        ));
-    }
-    Ok((scene, hash))
+    s.stop.target_noise = args.target_noise;
+    s.stop.adaptive = args.adaptive;
+    s.crop = args.crop;
+    s.sample_offset = args.sample_offset;
 }
 
 /// The metadata of the image after `stats`; `done` is false for a checkpoint.
-fn metadata(
-    scene: &Scene,
-    hash: &str,
-    args: &RenderArgs,
-    stats: &RenderStats,
-    done: bool,
-) -> Metadata {
-    let s = &scene.settings;
-    let crop = args.crop.unwrap_or(Crop::full(s.width, s.height));
+fn metadata(s: &Settings, hash: &str, stats: &RenderStats, done: bool) -> Metadata {
+    let crop = s.crop_or_full();
     Metadata {
         program: program(),
         scene_hash: hash.to_string(),
         integrator: s.integrator.name().into(),
         seed: s.seed,
         max_depth: s.max_depth,
-        width: s.width,
-        height: s.height,
+        width: s.film.width,
+        height: s.film.height,
         crop: [crop.x0, crop.y0, crop.x1, crop.y1],
         spp: stats.spp,
         max_spp: stats.max_spp,
-        samples: vec![(args.sample_offset, stats.spp)],
+        samples: vec![(s.sample_offset, stats.spp)],
         render_seconds: stats.seconds,
         passes: stats.passes,
         stopped_by: match stats.stopped_by {
@@ -209,7 +252,52 @@ fn metadata(
 /// Renders and writes the image; returns the exit status.
 pub fn run_render(args: &RenderArgs) -> Result<i32> {
     let start = Instant::now();
-    let (scene, hash) = prepare(args)?;
+    let (scene, settings, hash) = prepare(args)?;
+    report_load(&scene, args, start);
+    let interrupt = interrupt_flag();
+    if scene.report.cache == CacheUse::Hit {
+        report_vanished_cache_entries();
+    }
+    let options = RenderOptions {
+        threads: args.threads.map(|t| t as usize),
+        progress: !args.quiet,
+        interrupt: Some(interrupt.clone()),
+    };
+    let mut window = open_window(&scene, &settings, args, &interrupt)?;
+    let (image, stats) =
+        render_with_checkpoints(&scene, &settings, &options, &hash, args, &mut window)?;
+    let s = &settings;
+    let m = metadata(s, &hash, &stats, true);
+    write_image_with(
+        &s.film.output,
+        &image,
+        s.film.tonemap,
+        s.film.exposure,
+        Some(&m),
+    )?;
+    report_render(s, &image, &stats);
+    if stats.stopped_by == StopReason::Interrupted {
+        return Ok(INTERRUPTED_EXIT);
+    }
+    if let Some(dir) = &args.bdpt_strategies {
+        // As many samples as the main render took, whatever stopped it.
+        match write_strategies(&scene, &settings, stats.spp, &options, dir) {
+            Err(Error::Interrupted) => {
+                eprintln!("interrupted: the strategy images were not written");
+                return Ok(INTERRUPTED_EXIT);
+            }
+            other => other?,
+        }
+    }
+    if let Some(w) = window.take() {
+        eprintln!("showing the result: close the window (or press Ctrl-C) to exit");
+        w.wait();
+    }
+    Ok(0)
+}
+
+/// Prints what loading found and how long it took.
+fn report_load(scene: &Scene, args: &RenderArgs, start: Instant) {
     for w in &scene.report.warnings {
         eprintln!("warning: {w}");
     }
@@ -217,18 +305,6 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
         eprintln!(
             "note: dropped {} degenerate (zero-area) triangles",
             scene.report.degenerate_triangles_dropped
-        );
-    }
-    let want_preview = args.preview || scene.display == Some(Display::Window);
-    if want_preview && !preview::AVAILABLE {
-        if args.preview {
-            return Err(Error::Unsupported(
-                "--preview needs a build with the preview window: cargo build --release --features preview".into(),
-            ));
-        }
-        eprintln!(
-            "note: this T-racer scene asks for a preview window, which this build does not have (build with --features preview); writing {}",
-            scene.settings.output.display()
         );
     }
     let bvh = match scene.report.cache {
@@ -248,49 +324,73 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
         scene.lights.len(),
         start.elapsed().as_secs_f64(),
     );
-    let interrupt = interrupt_flag();
-    let options = RenderOptions {
-        threads: args.threads.map(|t| t as usize),
-        progress: !args.quiet,
-        crop: args.crop,
-        sample_offset: args.sample_offset,
-        target_noise: args.target_noise,
-        interrupt: Some(interrupt.clone()),
-        adaptive: args.adaptive,
-    };
-    // Before a window opens or anything is written.
-    options.check(&scene.settings)?;
-    let s = &scene.settings;
-    let mut window = match (want_preview && preview::AVAILABLE)
-        .then(|| preview::Preview::open(&scene, options.crop, interrupt.clone()))
-    {
-        None => None,
-        Some(Ok(w)) => Some(w),
+}
+
+/// The preview window, when `--preview` or a T-racer scene asks for one.
+fn open_window(
+    scene: &Scene,
+    settings: &Settings,
+    args: &RenderArgs,
+    interrupt: &std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> Result<Option<preview::Preview>> {
+    let output = settings.film.output.display();
+    let want = args.preview || settings.display == Some(Display::Window);
+    if !want {
+        return Ok(None);
+    }
+    if !preview::AVAILABLE {
+        if args.preview {
+            return Err(Error::Preview(
+                "--preview needs a build with the preview window: cargo build --release --features preview".into(),
+            ));
+        }
+        eprintln!(
+            "note: this T-racer scene asks for a preview window, which this build does not have (build with --features preview); writing {output}"
+        );
+        return Ok(None);
+    }
+    match preview::Preview::open(&scene.name, settings.crop_or_full(), interrupt.clone()) {
+        Ok(w) => Ok(Some(w)),
         // Asked for on the command line: an error. Asked for by a T-racer
         // scene: the image is what matters.
-        Some(Err(e)) if args.preview => return Err(e),
-        Some(Err(e)) => {
-            eprintln!(
-                "warning: {e}; writing {} only",
-                scene.settings.output.display()
-            );
-            None
+        Err(e) if args.preview => Err(e),
+        Err(e) => {
+            eprintln!("warning: {e}; writing {output} only");
+            Ok(None)
         }
-    };
-    let checkpoint = Duration::from_secs_f32(args.checkpoint);
+    }
+}
+
+/// Renders, showing each pass in the window and writing the image so far
+/// at most every `--checkpoint` seconds.
+fn render_with_checkpoints(
+    scene: &Scene,
+    s: &Settings,
+    options: &RenderOptions,
+    hash: &str,
+    args: &RenderArgs,
+    window: &mut Option<preview::Preview>,
+) -> Result<(tracer::film::Image, RenderStats)> {
+    // A checkpoint interval too long for the clock means only the first.
+    let checkpoint = Duration::try_from_secs_f64(args.checkpoint).unwrap_or(Duration::MAX);
     let mut last_write: Option<Instant> = None;
     let mut checkpoint_error = None;
-    let (image, stats) = render_with(&scene, &options, |acc, stats| {
+    let result = render_with(scene, s, options, |acc, stats| {
         if let Some(w) = window.as_mut() {
-            w.show(&acc.image(), s.tonemap, s.exposure);
+            w.show(&acc.image(), s.film.tonemap, s.film.exposure);
         }
         let due = last_write.is_none_or(|t| t.elapsed() >= checkpoint);
-        // The final image is written below; a checkpoint after the last pass would be wasted.
-        if due && stats.stopped_by == StopReason::SampleCount && stats.spp < s.spp {
-            let m = metadata(&scene, &hash, args, stats, false);
-            if let Err(e) =
-                write_image_with(&s.output, &acc.image(), s.tonemap, s.exposure, Some(&m))
-            {
+        // The final image is written after; a checkpoint after the last pass would be wasted.
+        if due && stats.stopped_by == StopReason::SampleCount && stats.spp < s.stop.spp {
+            let m = metadata(s, hash, stats, false);
+            let image = acc.image();
+            if let Err(e) = write_image_with(
+                &s.film.output,
+                &image,
+                s.film.tonemap,
+                s.film.exposure,
+                Some(&m),
+            ) {
                 checkpoint_error.get_or_insert(e);
             }
             last_write = Some(Instant::now());
@@ -299,15 +399,18 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
     if let Some(e) = checkpoint_error {
         eprintln!("warning: a checkpoint could not be written: {e}");
     }
-    let m = metadata(&scene, &hash, args, &stats, true);
-    write_image_with(&s.output, &image, s.tonemap, s.exposure, Some(&m))?;
+    Ok(result)
+}
+
+/// Prints what the render took and why it stopped.
+fn report_render(s: &Settings, image: &tracer::film::Image, stats: &RenderStats) {
     let (w, h) = (image.width, image.height);
     let noise = stats
         .noise
         .map_or(String::new(), |n| format!(", noise {n:.4}"));
     eprintln!(
         "wrote {}: {w}x{h}, {} spp, {:.2} s, {:.2} M samples/s{noise}",
-        s.output.display(),
+        s.film.output.display(),
         stats.spp,
         stats.seconds,
         stats.samples_per_second() / 1e6
@@ -319,44 +422,37 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
         );
     }
     match stats.stopped_by {
-        StopReason::Interrupted => {
-            eprintln!(
-                "interrupted after {:.2} s: the image holds {}..{} samples per pixel, each pixel divided by its own count",
-                stats.seconds, stats.spp, stats.max_spp
-            );
-            return Ok(INTERRUPTED_EXIT);
-        }
+        StopReason::Interrupted => eprintln!(
+            "interrupted after {:.2} s: the image holds {}..{} samples per pixel, each pixel divided by its own count",
+            stats.seconds, stats.spp, stats.max_spp
+        ),
         StopReason::TargetNoise => eprintln!(
             "stopped at the target noise {}",
-            args.target_noise.unwrap_or_default()
+            s.stop.target_noise.unwrap_or_default()
         ),
         StopReason::TimeLimit => eprintln!("stopped at the time limit"),
         StopReason::SampleCount => {}
     }
-    if let Some(dir) = &args.bdpt_strategies {
-        // As many samples as the main render took, whatever stopped it.
-        let mut scene = scene;
-        scene.settings.spp = stats.spp;
-        match write_strategies(&scene, &options, dir) {
-            Err(Error::Interrupted) => {
-                eprintln!("interrupted: the strategy images were not written");
-                return Ok(INTERRUPTED_EXIT);
-            }
-            other => other?,
-        }
-    }
-    if let Some(w) = window.take() {
-        eprintln!("showing the result: close the window (or press Ctrl-C) to exit");
-        w.wait();
-    }
-    Ok(0)
 }
 
-/// Renders BDPT once more, keeping each strategy apart, and writes
-/// `s{S}_t{T}_unweighted.exr` and `s{S}_t{T}_weighted.exr` into `dir`.
-fn write_strategies(scene: &Scene, options: &RenderOptions, dir: &std::path::Path) -> Result<()> {
+/// Renders BDPT once more with `spp` samples, keeping each strategy apart,
+/// and writes `s{S}_t{T}_unweighted.exr` and `s{S}_t{T}_weighted.exr` into `dir`.
+fn write_strategies(
+    scene: &Scene,
+    settings: &Settings,
+    spp: u32,
+    options: &RenderOptions,
+    dir: &Path,
+) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let images = render_strategies(scene, options)?;
+    let mut s = settings.clone();
+    s.integrator = IntegratorKind::Bdpt;
+    s.max_depth = s.max_depth.min(MAX_STRATEGY_LENGTH);
+    s.stop.spp = spp;
+    s.stop.time_limit = None;
+    s.stop.target_noise = None;
+    s.stop.adaptive = false;
+    let images = render_strategies(scene, &s, options)?;
     for i in &images {
         for (kind, image) in [("unweighted", &i.unweighted), ("weighted", &i.weighted)] {
             let path = dir.join(format!("s{}_t{}_{kind}.exr", i.s, i.t));
@@ -366,7 +462,7 @@ fn write_strategies(scene: &Scene, options: &RenderOptions, dir: &std::path::Pat
     eprintln!(
         "wrote {} strategy images (paths up to {} segments) to {}",
         2 * images.len(),
-        scene.settings.max_depth.min(MAX_STRATEGY_LENGTH),
+        s.max_depth,
         dir.display()
     );
     Ok(())

@@ -26,7 +26,7 @@ pub fn interrupt_flag() -> Arc<AtomicBool> {
         match signal_action(&signals) {
             SignalAction::ExitNow => {
                 say("interrupted again: exiting without writing");
-                crate::film::write::remove_writes_in_flight();
+                tracer::film::write::remove_writes_in_flight();
                 std::process::exit(INTERRUPTED_EXIT);
             }
             SignalAction::Stop => {
@@ -39,6 +39,34 @@ pub fn interrupt_flag() -> Arc<AtomicBool> {
         eprintln!("warning: cannot catch Ctrl-C ({e}); an interrupted render will be lost");
     }
     flag
+}
+
+/// The exit status after a mapped scene cache entry vanished under the
+/// render (SIGBUS): 128 + SIGBUS, as shells report a death by that signal.
+pub const CACHE_VANISHED_EXIT: i32 = 128 + libc::SIGBUS;
+
+/// Turns SIGBUS, which a truncated memory-mapped cache entry raises when
+/// the render touches its lost pages, into a message and an orderly exit
+/// instead of a crash. Images are only ever written whole (a temporary
+/// file renamed into place), so the last checkpoint on disk stays intact.
+pub fn report_vanished_cache_entries() {
+    extern "C" fn on_sigbus(_: libc::c_int) {
+        const MESSAGE: &[u8] = b"\nerror: a scene cache entry this render maps was truncated or replaced in place (SIGBUS); the last checkpoint written is intact. Render again (the entry is checked and rebuilt), or use --no-cache for a cache folder other machines write to.\n";
+        // SAFETY: write(2) and _exit(2) are async-signal-safe, and MESSAGE
+        // is a static buffer of the length given.
+        unsafe {
+            libc::write(2, MESSAGE.as_ptr().cast(), MESSAGE.len());
+            libc::_exit(CACHE_VANISHED_EXIT);
+        }
+    }
+    // SAFETY: the action is zeroed then filled in before use, and the
+    // handler only makes async-signal-safe calls.
+    unsafe {
+        let mut action: libc::sigaction = std::mem::zeroed();
+        action.sa_sigaction = on_sigbus as *const () as libc::sighandler_t;
+        libc::sigemptyset(&mut action.sa_mask);
+        libc::sigaction(libc::SIGBUS, &action, std::ptr::null_mut());
+    }
 }
 
 #[derive(Debug, PartialEq, Eq)]

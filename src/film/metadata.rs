@@ -16,11 +16,15 @@ pub struct Metadata {
     pub program: String,
     /// BLAKE3 of the scene's geometry inputs, camera, materials and lights.
     pub scene_hash: String,
+    /// The integrator's name: `pt`, `lt` or `bdpt`.
     pub integrator: String,
+    /// The seed every sample was drawn from.
     pub seed: u64,
+    /// The most path segments a path could have.
     pub max_depth: u32,
     /// The full image's size; a crop is part of it.
     pub width: u32,
+    /// The full image's height, in pixels.
     pub height: u32,
     /// The pixels this image holds: x0, y0, x1, y1 (upper bounds exclusive).
     pub crop: [u32; 4],
@@ -32,7 +36,9 @@ pub struct Metadata {
     /// The sample indices every pixel holds, as (first, count) runs: one
     /// run for a render, several for a merge of renders with offsets.
     pub samples: Vec<(u32, u32)>,
+    /// Wall-clock seconds spent rendering (summed over the renders merged).
     pub render_seconds: f64,
+    /// Progressive passes taken (the most of any render merged).
     pub passes: u32,
     /// What ended the render: `spp`, `time-limit`, `target-noise`,
     /// `interrupted`, `merge`, or `in progress` for a checkpoint.
@@ -58,6 +64,7 @@ pub fn pixels_hash(image: &super::Image) -> String {
     h.finalize().to_hex().to_string()
 }
 
+/// This program's name and version, as [`Metadata::program`] records it.
 pub fn program() -> String {
     format!("tracer {}", env!("CARGO_PKG_VERSION"))
 }

@@ -1,6 +1,7 @@
 //! The image: linear radiance per pixel, tone mapping, and the writers.
 
 pub mod metadata;
+pub mod read;
 pub mod tonemap;
 pub mod write;
 
@@ -9,12 +10,16 @@ use crate::color::Rgb;
 /// A linear RGB image, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Width, in pixels.
     pub width: u32,
+    /// Height, in pixels.
     pub height: u32,
+    /// `width × height` pixels, row-major from the top-left.
     pub pixels: Vec<Rgb>,
 }
 
 impl Image {
+    /// A black image of `width` × `height` pixels.
     pub fn new(width: u32, height: u32) -> Image {
         Image {
             width,
@@ -23,10 +28,12 @@ impl Image {
         }
     }
 
+    /// The pixel in column `x`, row `y` from the top; both must be inside the image.
     pub fn get(&self, x: u32, y: u32) -> Rgb {
         self.pixels[y as usize * self.width as usize + x as usize]
     }
 
+    /// Sets the pixel in column `x`, row `y` from the top; both must be inside the image.
     pub fn set(&mut self, x: u32, y: u32, c: Rgb) {
         self.pixels[y as usize * self.width as usize + x as usize] = c;
     }
@@ -64,5 +71,7 @@ pub fn relative_mse(image: &Image, reference: &Image) -> Option<f64> {
 pub struct Splat {
     /// Row-major pixel index.
     pub pixel: u32,
+    /// One light path's contribution; the film scales the sum of splats by
+    /// pixel count / light paths traced.
     pub value: Rgb,
 }

@@ -1,7 +1,35 @@
 //! Maps linear radiance to 8-bit display values.
 
 use crate::color::Rgb;
-use crate::scene::desc::Tonemap;
+
+/// The curve that turns linear radiance into 8-bit PNG and TGA pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Tonemap {
+    /// x^(1/2.2)
+    Gamma,
+    /// The sRGB transfer curve.
+    Srgb,
+    /// ACES filmic curve (Narkowicz's fit), then sRGB.
+    Aces,
+    /// Clamp to [0, 1], no curve: linear values in 8 bits.
+    Clamp,
+}
+
+impl Tonemap {
+    /// Every curve, in the order the documentation lists them.
+    pub const ALL: [Tonemap; 4] = [Tonemap::Gamma, Tonemap::Srgb, Tonemap::Aces, Tonemap::Clamp];
+
+    /// The name the scene format uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Tonemap::Gamma => "gamma",
+            Tonemap::Srgb => "srgb",
+            Tonemap::Aces => "aces",
+            Tonemap::Clamp => "clamp",
+        }
+    }
+}
 
 /// The display value in [0, 1] of one linear channel, after `exposure` stops.
 pub fn map_channel(x: f32, tonemap: Tonemap, exposure: f32) -> f32 {
@@ -16,6 +44,8 @@ pub fn map_channel(x: f32, tonemap: Tonemap, exposure: f32) -> f32 {
     y.clamp(0.0, 1.0)
 }
 
+/// The 8-bit display value of a linear colour, by [`map_channel`], rounded
+/// to nearest.
 pub fn to_8bit(c: Rgb, tonemap: Tonemap, exposure: f32) -> [u8; 3] {
     let q = |x: f32| (map_channel(x, tonemap, exposure) * 255.0 + 0.5) as u8;
     [q(c.x), q(c.y), q(c.z)]

@@ -7,22 +7,27 @@
 
 use super::metadata::{pixels_hash, sidecar_path, Metadata};
 use super::tonemap::to_8bit;
+use super::tonemap::Tonemap;
 use super::Image;
-use crate::scene::desc::Tonemap;
 use crate::{Error, Result};
 use std::io::{Cursor, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
+/// An image file format, named by its extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
+    /// OpenEXR: linear 32-bit float channels, with the metadata in its header.
     Exr,
+    /// Portable float map: linear 32-bit floats, metadata in a sidecar.
     Pfm,
+    /// PNG: tone mapped to 8 bits, metadata in a sidecar.
     Png,
+    /// TGA: tone mapped to 8 bits, metadata in a sidecar.
     Tga,
 }
 
 impl ImageFormat {
+    /// The format `path`'s extension names (any case); `None` for other extensions.
     pub fn from_path(path: &Path) -> Option<ImageFormat> {
         let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
         Some(match ext.as_str() {
@@ -41,7 +46,8 @@ pub fn write_image(path: &Path, image: &Image, tonemap: Tonemap, exposure: f32) 
 }
 
 /// Writes `image` with `metadata`: in the header of an EXR, else in a JSON
-/// sidecar beside the image (written first, so an image never lacks it).
+/// sidecar beside the image. Both are written to temporary files first, so
+/// a failure replaces neither.
 pub fn write_image_with(
     path: &Path,
     image: &Image,
@@ -58,17 +64,36 @@ pub fn write_image_with(
             path: path.to_path_buf(),
             message,
         })?;
-    if let (Some(m), false) = (metadata, format == ImageFormat::Exr) {
-        let m = Metadata {
-            pixels_hash: Some(pixels_hash(image)),
-            ..m.clone()
-        };
-        let json = serde_json::to_vec_pretty(&m).expect("metadata serialises");
-        write_atomic(&sidecar_path(path), &json)?;
+    let image_file = Staged::new(path, &bytes)?;
+    // The sidecar is staged before either file replaces its old version:
+    // where the disk is full or the folder unwritable, both fail together
+    // and neither old file is touched.
+    let sidecar = match (metadata, format == ImageFormat::Exr) {
+        (Some(m), false) => {
+            let m = Metadata {
+                pixels_hash: Some(pixels_hash(image)),
+                ..m.clone()
+            };
+            let json = serde_json::to_vec_pretty(&m).map_err(|e| Error::Image {
+                path: sidecar_path(path),
+                message: format!("cannot encode metadata: {e}"),
+            })?;
+            Some(Staged::new(&sidecar_path(path), &json)?)
+        }
+        _ => None,
+    };
+    image_file.commit()?;
+    // A sidecar left over from an earlier image describes other pixels;
+    // readers compare the pixels' hash, so a failure here cannot mislead.
+    match sidecar {
+        Some(s) => s.commit(),
+        None => Ok(()),
     }
-    write_atomic(path, &bytes)
 }
 
+/// The bytes of the image file, with `metadata` in the header of an EXR
+/// (other formats' metadata goes in a sidecar, see [`write_image_with`]);
+/// `tonemap` and `exposure` apply only to PNG and TGA.
 pub fn encode(
     image: &Image,
     format: ImageFormat,
@@ -144,35 +169,87 @@ fn encode_pfm(image: &Image) -> Vec<u8> {
 
 /// Writes `bytes` to `path` through a temporary file and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    let temp = folder.join(format!(
-        ".{name}.{}-{}.tmp",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
+    Staged::new(path, bytes)?.commit()
+}
+
+/// Checks that `path` can be written, by creating (and removing) a
+/// temporary file beside it: a render can refuse an unwritable output
+/// before it starts, not after it has finished.
+pub fn check_writable(path: &Path) -> Result<()> {
+    Staged::new(path, &[]).map(|_| ())
+}
+
+/// Bytes written to a temporary file beside their destination, flushed to
+/// disk, waiting to be renamed into place. The temporary file has a random
+/// name and is created exclusively (`O_CREAT | O_EXCL`), so a file or a
+/// symbolic link planted beside the output can never be written through.
+/// Dropped without [`Staged::commit`], it is removed.
+struct Staged {
+    /// `None` once committed.
+    file: Option<tempfile::NamedTempFile>,
+    target: PathBuf,
+}
+
+impl Staged {
+    fn new(path: &Path, bytes: &[u8]) -> Result<Staged> {
+        let folder = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        let prefix = format!(".{name}.");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        // As a plainly created file would be (the umask applies), not 0600.
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        let mut file = builder
+            .tempfile_in(&folder)
+            .map_err(|e| Error::io(path, e))?;
+        in_flight()
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(file.path().to_path_buf());
+        let written = file
+            .write_all(bytes)
+            .and_then(|()| file.as_file().sync_all());
+        if let Err(e) = written {
+            forget_in_flight(file.path());
+            return Err(Error::io(path, e));
+        }
+        Ok(Staged {
+            file: Some(file),
+            target: path.to_path_buf(),
+        })
+    }
+
+    /// Renames the file into place.
+    fn commit(mut self) -> Result<()> {
+        let Some(file) = self.file.take() else {
+            return Ok(());
+        };
+        let temp = file.path().to_path_buf();
+        let result = file.persist(&self.target);
+        forget_in_flight(&temp);
+        result
+            .map(|_| ())
+            .map_err(|e| Error::io(&self.target, e.error))
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some(file) = &self.file {
+            forget_in_flight(file.path());
+        }
+    }
+}
+
+fn forget_in_flight(temp: &Path) {
     in_flight()
         .lock()
         .unwrap_or_else(|e| e.into_inner())
-        .push(temp.clone());
-    let result = (|| {
-        let mut file = std::fs::File::create(&temp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        std::fs::rename(&temp, path)
-    })();
-    in_flight()
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .retain(|t| *t != temp);
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&temp);
-        Error::io(path, e)
-    })
+        .retain(|t| t != temp);
 }
 
 /// Temporary files being written now.
@@ -188,125 +265,5 @@ pub fn remove_writes_in_flight() {
     let temps = std::mem::take(&mut *in_flight().lock().unwrap_or_else(|e| e.into_inner()));
     for t in temps {
         let _ = std::fs::remove_file(t);
-    }
-}
-
-/// Reads a PFM written by [`write_image`] (or any RGB little-endian PFM).
-pub fn read_pfm(path: &Path) -> Result<Image> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let bad = |m: &str| Error::Image {
-        path: path.to_path_buf(),
-        message: m.to_string(),
-    };
-    let mut fields = Vec::new();
-    let mut start = 0;
-    let mut i = 0;
-    while fields.len() < 4 && i < bytes.len() {
-        if bytes[i].is_ascii_whitespace() {
-            if i > start {
-                fields.push(String::from_utf8_lossy(&bytes[start..i]).into_owned());
-            }
-            start = i + 1;
-        }
-        i += 1;
-    }
-    if fields.len() < 4 || fields[0] != "PF" {
-        return Err(bad("not an RGB PFM file"));
-    }
-    let w: u32 = fields[1].parse().map_err(|_| bad("bad width"))?;
-    let h: u32 = fields[2].parse().map_err(|_| bad("bad height"))?;
-    let scale: f32 = fields[3].parse().map_err(|_| bad("bad scale"))?;
-    if scale >= 0.0 {
-        return Err(bad("big-endian PFM is not supported"));
-    }
-    let data = &bytes[start..];
-    if data.len() != w as usize * h as usize * 12 {
-        return Err(bad("pixel data has the wrong length"));
-    }
-    let mut image = Image::new(w, h);
-    for (k, c) in data.chunks_exact(12).enumerate() {
-        let f = |o: usize| f32::from_le_bytes(c[o..o + 4].try_into().unwrap());
-        let (x, y) = (k as u32 % w, h - 1 - k as u32 / w);
-        image.set(x, y, glam::Vec3::new(f(0), f(4), f(8)));
-    }
-    Ok(image)
-}
-
-/// Reads a linear image and the metadata `tracer` wrote with it (EXR
-/// attributes, or a PFM's JSON sidecar).
-pub fn read_with_metadata(path: &Path) -> Result<(Image, Metadata)> {
-    let bad = |message: String| Error::Image {
-        path: path.to_path_buf(),
-        message,
-    };
-    match ImageFormat::from_path(path) {
-        Some(ImageFormat::Exr) => {
-            use exr::prelude::*;
-            let image = read()
-                .no_deep_data()
-                .largest_resolution_level()
-                .rgb_channels(
-                    |size: Vec2<usize>, _: &RgbChannels| {
-                        super::Image::new(size.width() as u32, size.height() as u32)
-                    },
-                    |image: &mut super::Image, p: Vec2<usize>, (r, g, b): (f32, f32, f32)| {
-                        image.set(p.x() as u32, p.y() as u32, glam::Vec3::new(r, g, b))
-                    },
-                )
-                .first_valid_layer()
-                .all_attributes()
-                .from_file(path)
-                .map_err(|e| bad(format!("cannot decode: {e}")))?;
-            let layer = image.layer_data;
-            let metadata = Metadata::from_exr_attributes(&layer.attributes.other).map_err(bad)?;
-            Ok((layer.channel_data.pixels, metadata))
-        }
-        Some(ImageFormat::Pfm) => {
-            let image = read_pfm(path)?;
-            let side = sidecar_path(path);
-            let text = std::fs::read(&side).map_err(|e| Error::io(&side, e))?;
-            let metadata: Metadata = serde_json::from_slice(&text).map_err(|e| Error::Image {
-                path: side.clone(),
-                message: format!("not tracer metadata: {e}"),
-            })?;
-            if metadata
-                .pixels_hash
-                .as_ref()
-                .is_some_and(|h| *h != pixels_hash(&image))
-            {
-                return Err(Error::Image {
-                    path: side,
-                    message: "describes another version of its image (the pixels' hash differs)"
-                        .into(),
-                });
-            }
-            Ok((image, metadata))
-        }
-        _ => Err(bad(
-            "partial renders must be .exr (or .pfm with its .json sidecar)".into(),
-        )),
-    }
-}
-
-/// Reads a linear image written by `tracer` (or any tool): `.pfm` or `.exr`.
-pub fn read_linear(path: &Path) -> Result<Image> {
-    match ImageFormat::from_path(path) {
-        Some(ImageFormat::Pfm) => read_pfm(path),
-        Some(ImageFormat::Exr) => {
-            let (width, height, pixels) =
-                crate::scene::texture::read_exr(path).map_err(|message| Error::Image {
-                    path: path.to_path_buf(),
-                    message,
-                })?;
-            Ok(Image {
-                width: width as u32,
-                height: height as u32,
-                pixels,
-            })
-        }
-        _ => Err(Error::Image {
-            path: path.to_path_buf(),
-            message: "not a linear image: use .pfm or .exr".into(),
-        }),
     }
 }

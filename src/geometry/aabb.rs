@@ -2,9 +2,13 @@
 
 use glam::Vec3;
 
+/// An axis-aligned box, `min` to `max` inclusive. Empty when any `min`
+/// component exceeds its `max` (as [`Aabb::EMPTY`] does).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// Lowest corner.
     pub min: Vec3,
+    /// Highest corner.
     pub max: Vec3,
 }
 
@@ -15,10 +19,12 @@ impl Aabb {
         max: Vec3::splat(f32::NEG_INFINITY),
     };
 
+    /// The smallest box holding all `points`; [`Aabb::EMPTY`] for none.
     pub fn from_points(points: &[Vec3]) -> Aabb {
         points.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p))
     }
 
+    /// The box grown just enough to hold `p`.
     pub fn grow(self, p: Vec3) -> Aabb {
         Aabb {
             min: self.min.min(p),
@@ -26,6 +32,7 @@ impl Aabb {
         }
     }
 
+    /// The smallest box holding both boxes.
     pub fn union(self, o: Aabb) -> Aabb {
         Aabb {
             min: self.min.min(o.min),
@@ -33,10 +40,12 @@ impl Aabb {
         }
     }
 
+    /// Whether the box holds no point at all (a flat box is not empty).
     pub fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
 
+    /// Size along each axis; zero for an empty box.
     pub fn extent(&self) -> Vec3 {
         if self.is_empty() {
             Vec3::ZERO
@@ -45,6 +54,7 @@ impl Aabb {
         }
     }
 
+    /// The midpoint of the box (not meaningful for an empty box).
     pub fn center(&self) -> Vec3 {
         0.5 * (self.min + self.max)
     }

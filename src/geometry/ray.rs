@@ -3,16 +3,22 @@
 
 use glam::Vec3;
 
+/// A ray `origin + t·dir`, restricted to an open interval of `t`.
 #[derive(Clone, Copy, Debug)]
 pub struct Ray {
+    /// Where the ray starts, in world space.
     pub origin: Vec3,
+    /// Direction. The intersection tests accept any non-zero length; the
+    /// renderer's rays are unit length, which makes `t` a world-space distance.
     pub dir: Vec3,
     /// Hits count only for `tmin < t < tmax`.
     pub tmin: f32,
+    /// Far end of the interval: `f32::INFINITY` for an unbounded ray.
     pub tmax: f32,
 }
 
 impl Ray {
+    /// An unbounded ray: `0 < t < ∞`.
     pub fn new(origin: Vec3, dir: Vec3) -> Ray {
         Ray {
             origin,
@@ -32,6 +38,7 @@ impl Ray {
         }
     }
 
+    /// The point at parameter `t`.
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + t * self.dir
     }

@@ -6,9 +6,12 @@ use std::collections::HashMap;
 /// An indexed triangle mesh before it is transformed into the scene.
 #[derive(Clone, Debug, Default)]
 pub struct MeshData {
+    /// Vertex positions, in object space.
     pub positions: Vec<Vec3>,
     /// Per-vertex shading normals, if the shape has smooth normals.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, if the shape has them; `None` maps
+    /// every vertex to (0, 0).
     pub uvs: Option<Vec<Vec2>>,
     /// Three indices per triangle, counter-clockwise seen from the front.
     pub indices: Vec<u32>,

@@ -2,14 +2,17 @@
 
 use glam::{Mat3, Mat4, Vec3};
 
+/// An invertible affine transform from object space to world space.
 #[derive(Clone, Copy, Debug)]
 pub struct Transform {
+    /// The object-to-world matrix, applied to column vectors.
     pub matrix: Mat4,
     /// Inverse transpose of the upper 3x3, which carries normals.
     normal_matrix: Mat3,
 }
 
 impl Transform {
+    /// The transform that leaves everything where it is.
     pub const IDENTITY: Transform = Transform {
         matrix: Mat4::IDENTITY,
         normal_matrix: Mat3::IDENTITY,
@@ -41,10 +44,13 @@ impl Transform {
         Transform::new(Mat4::from_translation(translate) * r * Mat4::from_scale(scale))
     }
 
+    /// `p` transformed as a point (translation applies).
     pub fn point(&self, p: Vec3) -> Vec3 {
         self.matrix.transform_point3(p)
     }
 
+    /// `n` transformed as a normal (by the inverse transpose) and normalised;
+    /// zero for a zero `n`.
     pub fn normal(&self, n: Vec3) -> Vec3 {
         (self.normal_matrix * n).normalize_or_zero()
     }

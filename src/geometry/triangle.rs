@@ -8,21 +8,28 @@
 
 use glam::{DVec3, Vec3};
 
+/// A triangle by its three world-space vertices; the front face is the one
+/// they wind counter-clockwise around. A plain record the scene cache stores as bytes.
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct Triangle {
+    /// Vertices 0, 1, 2, counter-clockwise seen from the front.
     pub v: [Vec3; 3],
 }
 
 /// A hit: distance along the ray and the barycentric weights of vertices 1 and 2.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TriangleHit {
+    /// Ray parameter of the hit: a distance when the ray direction is unit length.
     pub t: f32,
+    /// Barycentric weight of vertex 1.
     pub b1: f32,
+    /// Barycentric weight of vertex 2 (vertex 0's is `1 - b1 - b2`).
     pub b2: f32,
 }
 
 impl Triangle {
+    /// The triangle with vertices `a`, `b`, `c` in that (winding) order.
     pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Triangle {
         Triangle { v: [a, b, c] }
     }
@@ -32,6 +39,7 @@ impl Triangle {
         (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0])
     }
 
+    /// Area, in squared world units.
     pub fn area(&self) -> f32 {
         0.5 * self.cross().length()
     }
@@ -41,6 +49,8 @@ impl Triangle {
         self.cross().normalize_or_zero()
     }
 
+    /// The point with barycentric weights `b1` on vertex 1 and `b2` on vertex 2
+    /// (single precision; see [`interpolate_precise`]).
     pub fn point(&self, b1: f32, b2: f32) -> Vec3 {
         (1.0 - b1 - b2) * self.v[0] + b1 * self.v[1] + b2 * self.v[2]
     }
@@ -59,6 +69,8 @@ pub struct RayShear {
 }
 
 impl RayShear {
+    /// Precomputes the shear for a ray from `origin` along `dir` (`dir` must
+    /// be non-zero; it need not be unit length).
     pub fn new(origin: Vec3, dir: Vec3) -> RayShear {
         let d = dir.to_array();
         let a = d.map(f32::abs);

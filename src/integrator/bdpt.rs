@@ -15,19 +15,26 @@
 //! BSDF vertex has `d_vcm = 0` (nothing can connect to it), and the
 //! light point seen directly (s = 1, t = 1) is left to s = 0.
 
-use super::subpath::{mis, trace_light_path, visible, Endpoint, LightVertex, SplatSink, Walk};
+use super::connect::{visible, Endpoint};
+use super::light_path::{camera_splat, follow_light_walk};
+use super::mis::mis;
+use super::sink::SampleSink;
+use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, Walk};
+use super::{PixelSample, ThreadState};
+use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
-use crate::geometry::Ray;
+use crate::geometry::{Ray, SurfacePoint};
 use crate::light::Light;
-use crate::material::{Bsdf, SurfacePoint, Transport};
+use crate::material::{Bsdf, Transport};
 use crate::sampling::Sampler;
 use crate::scene::{Scene, NO_LIGHT};
 use glam::Vec3;
 
-/// Buffers one thread reuses from sample to sample.
-#[derive(Default)]
-pub struct BdptBuffers {
-    pub light_vertices: Vec<LightVertex>,
+/// Bidirectional path tracing and its settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Bidirectional {
+    /// The most segments a path may have, whichever strategy makes it.
+    pub max_depth: u32,
 }
 
 /// A strategy's estimate on its own and its MIS weight.
@@ -35,91 +42,140 @@ type Weighted = (Rgb, f32);
 
 const NOTHING: Weighted = (Rgb::ZERO, 0.0);
 
-/// One BDPT sample through image point (`x`, `y`): returns the camera-side
-/// estimate for its pixel and pushes the light-side splats to `sink`.
-#[allow(clippy::too_many_arguments)]
-pub fn sample(
-    scene: &Scene,
-    x: f32,
-    y: f32,
-    camera_sampler: &mut Sampler,
-    light_sampler: &mut Sampler,
-    max_depth: u32,
-    buffers: &mut BdptBuffers,
-    sink: &mut SplatSink,
-) -> Rgb {
-    buffers.light_vertices.clear();
-    trace_light_path(
-        scene,
-        light_sampler,
-        max_depth,
-        false,
-        Some(&mut buffers.light_vertices),
-        sink,
-    );
-    let pixel = y as u32 * scene.camera.width() + x as u32;
-
-    let ray = scene.camera.ray(x, y);
-    let paths = super::subpath::light_paths_per_pass(scene);
-    let camera_pdf = scene.camera.direction_pdf(ray.dir);
-    if camera_pdf <= 0.0 {
-        return Rgb::ZERO;
+impl Bidirectional {
+    /// One BDPT sample of `pixel`: returns the camera-side estimate for the
+    /// pixel and pushes the light-side splats to `sink`.
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        pixel: PixelSample,
+        state: &mut ThreadState,
+        sink: &mut SampleSink,
+    ) -> Rgb {
+        let mut camera_sampler = pixel.camera_sampler();
+        let mut light_sampler = pixel.light_sampler();
+        let (jx, jy) = camera_sampler.next_2d();
+        let light_vertices = &mut state.light_vertices;
+        light_vertices.clear();
+        self.trace_light_path(scene, camera, &mut light_sampler, light_vertices, sink);
+        let (x, y) = (pixel.x as f32 + jx, pixel.y as f32 + jy);
+        let index = y as u32 * camera.width() + x as u32;
+        let ray = camera.ray(x, y);
+        let camera_pdf = camera.direction_pdf(ray.dir);
+        if camera_pdf <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let walk = Walk {
+            origin: ray.origin,
+            dir: ray.dir,
+            throughput: Rgb::ONE,
+            length: 1,
+            // Eq. 31 for the camera: the light tracer's density relative to this one.
+            d_vcm: mis(light_paths_per_pass(camera) / camera_pdf),
+            d_vc: 0.0,
+            finite_start: true,
+        };
+        self.trace_camera_path(
+            scene,
+            walk,
+            &mut camera_sampler,
+            light_vertices,
+            index,
+            sink,
+        )
     }
-    let mut walk = Walk {
-        origin: ray.origin,
-        dir: ray.dir,
-        throughput: Rgb::ONE,
-        length: 1,
-        // Eq. 31 for the camera: the light tracer's density relative to this one.
-        d_vcm: mis(paths / camera_pdf),
-        d_vc: 0.0,
-        finite_start: true,
-    };
-    let mut result = Rgb::ZERO;
-    // Adds one strategy's share; `t` counts the camera's vertices, the pinhole included.
-    let add =
-        |result: &mut Rgb, (unweighted, weight): Weighted, s: u32, t: u32, sink: &mut SplatSink| {
+
+    /// The light subpath: its vertices are kept for connections, and each
+    /// is joined to the camera (t = 1, report eq. 44 for the weight).
+    fn trace_light_path(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        sampler: &mut Sampler,
+        keep: &mut Vec<LightVertex>,
+        sink: &mut SampleSink,
+    ) {
+        sampler.start_vertex();
+        let Some(start) = start_light_walk(scene, sampler) else {
+            return;
+        };
+        let paths = light_paths_per_pass(camera);
+        follow_light_walk(scene, sampler, start.walk, self.max_depth, |v| {
+            keep.push(*v);
+            if let Some((c, value)) = camera_splat(scene, camera, v, paths) {
+                let (_, reverse_pdf) = v.bsdf.pdfs(v.wo, c.dir_to_camera);
+                let cos_surface = c.dir_to_camera.dot(v.surface.geometric_normal).abs();
+                let w_light = mis(c.camera_pdf_area(cos_surface) / paths)
+                    * (v.d_vcm + v.d_vc * mis(reverse_pdf));
+                let weight = 1.0 / (w_light + 1.0);
+                sink.emit(c.pixel, value * weight);
+                sink.record(v.length + 1, 1, c.pixel, value, weight);
+            }
+        });
+    }
+
+    /// The camera subpath from `walk`: at each vertex, the strategies with
+    /// t camera vertices (s = 0, s = 1, and every stored light vertex).
+    fn trace_camera_path(
+        &self,
+        scene: &Scene,
+        mut walk: Walk,
+        sampler: &mut Sampler,
+        light_vertices: &[LightVertex],
+        pixel: u32,
+        sink: &mut SampleSink,
+    ) -> Rgb {
+        let max_depth = self.max_depth;
+        let mut result = Rgb::ZERO;
+        // Adds one strategy's share; `t` counts the camera's vertices, the pinhole included.
+        let add = |result: &mut Rgb,
+                   (unweighted, weight): Weighted,
+                   s: u32,
+                   t: u32,
+                   sink: &mut SampleSink| {
             *result += unweighted * weight;
             sink.record(s, t, pixel, unweighted, weight);
         };
-    loop {
-        camera_sampler.start_vertex();
-        let ray = Ray::new(walk.origin, walk.dir);
-        let Some(hit) = scene.intersect(&ray) else {
-            break;
-        };
-        let surface = scene.surface(&hit);
-        let wo = -ray.dir;
-        walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
-        let shading = scene.shading[hit.triangle as usize];
+        loop {
+            sampler.start_vertex();
+            let ray = Ray::new(walk.origin, walk.dir);
+            let Some(hit) = scene.intersect(&ray) else {
+                break;
+            };
+            let surface = scene.surface(&hit);
+            let wo = -ray.dir;
+            walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
+            let shading = scene.shading[hit.triangle as usize];
 
-        let t = walk.length + 1;
-        if shading.light != NO_LIGHT {
-            let (le, weight) = hit_emitter(scene, shading.light as usize, wo, &walk);
-            add(&mut result, (walk.throughput * le, weight), 0, t, sink);
-        }
-        if walk.length >= max_depth {
-            break;
-        }
-        let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
-        if !bsdf.is_delta() {
-            let (l, weight) = light_sample(scene, &surface, &bsdf, wo, &walk, camera_sampler);
-            add(&mut result, (walk.throughput * l, weight), 1, t, sink);
-            for v in &buffers.light_vertices {
-                if v.length + 1 + walk.length > max_depth {
-                    break;
-                }
-                let (l, weight) = connect(scene, &surface, &bsdf, wo, &walk, v);
-                let l = walk.throughput * v.throughput * l;
-                add(&mut result, (l, weight), v.length + 1, t, sink);
+            let t = walk.length + 1;
+            if shading.light != NO_LIGHT {
+                let (le, weight) = hit_emitter(scene, shading.light as usize, wo, &walk);
+                add(&mut result, (walk.throughput * le, weight), 0, t, sink);
             }
+            if walk.length >= max_depth {
+                break;
+            }
+            let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
+            if !bsdf.is_delta() {
+                let (l, weight) = light_sample(scene, &surface, &bsdf, wo, &walk, sampler);
+                add(&mut result, (walk.throughput * l, weight), 1, t, sink);
+                for v in light_vertices {
+                    if v.length + 1 + walk.length > max_depth {
+                        break;
+                    }
+                    let (l, weight) = connect(scene, &surface, &bsdf, wo, &walk, v);
+                    let l = walk.throughput * v.throughput * l;
+                    add(&mut result, (l, weight), v.length + 1, t, sink);
+                }
+            }
+            if !walk.scatter(&bsdf, &surface, wo, sampler, Transport::Radiance) {
+                break;
+            }
+            walk.length += 1;
         }
-        if !walk.scatter(&bsdf, &surface, wo, camera_sampler, Transport::Radiance) {
-            break;
-        }
-        walk.length += 1;
+        result
     }
-    result
 }
 
 /// s = 0: the camera path has reached an emitter (eq. 43).
@@ -173,7 +229,7 @@ fn light_sample(
         * (walk.d_vcm + walk.d_vc * mis(reverse_pdf));
     let weight = 1.0 / (w_light + 1.0 + w_camera);
     let contribution = f * sample.value / (pick * sample.pdf);
-    if is_black(contribution) || !super::pt::unoccluded(scene, surface, &sample) {
+    if is_black(contribution) || !super::connect::unoccluded(scene, surface, &sample) {
         return NOTHING;
     }
     (contribution, weight)

@@ -5,11 +5,71 @@
 //! a real check. Point and spot lights have no area and are never seen
 //! directly by the pinhole camera, in any integrator.
 
-use super::subpath::{trace_light_path, SplatSink};
+use super::connect::{visible, CameraConnection, Endpoint};
+use super::light_path::{camera_splat, follow_light_walk};
+use super::sink::SampleSink;
+use super::walk::{light_paths_per_pass, start_light_walk, LightStart};
+use crate::camera::Camera;
+use crate::color::is_black;
+use crate::light::Light;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
-/// Traces one light path and pushes its splats.
-pub fn sample(scene: &Scene, sampler: &mut Sampler, max_depth: u32, sink: &mut SplatSink) {
-    trace_light_path(scene, sampler, max_depth, true, None, sink);
+/// The light tracer and its settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightTracer {
+    /// The most segments a path may have, the camera connection included.
+    pub max_depth: u32,
+}
+
+impl LightTracer {
+    /// Traces one light path and pushes its splats.
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        sampler: &mut Sampler,
+        sink: &mut SampleSink,
+    ) {
+        sampler.start_vertex();
+        let Some(start) = start_light_walk(scene, sampler) else {
+            return;
+        };
+        let paths = light_paths_per_pass(camera);
+        splat_light_point(scene, camera, &start, paths, sink);
+        follow_light_walk(scene, sampler, start.walk, self.max_depth, |v| {
+            if let Some((c, value)) = camera_splat(scene, camera, v, paths) {
+                sink.emit(c.pixel, value);
+                sink.record(v.length + 1, 1, c.pixel, value, 1.0);
+            }
+        });
+    }
+}
+
+/// s = 1, t = 1: the point chosen on an area light, seen by the camera.
+fn splat_light_point(
+    scene: &Scene,
+    camera: &Camera,
+    start: &LightStart,
+    paths: f32,
+    sink: &mut SampleSink,
+) {
+    let Light::Area(light) = &scene.lights[start.light] else {
+        return;
+    };
+    let emission = &start.emission;
+    let Some(c) = CameraConnection::new(camera, emission.origin) else {
+        return;
+    };
+    let le = light.emitted(c.dir_to_camera);
+    let cos = c.dir_to_camera.dot(light.normal).abs();
+    let light_point = Endpoint {
+        position: emission.origin,
+        normal: light.normal,
+        magnitude: light.magnitude,
+    };
+    if !is_black(le) && visible(scene, light_point, Endpoint::point(camera.position)) {
+        let value = le * cos / (start.pick * emission.direct_pdf_area);
+        sink.emit(c.pixel, c.splat(value, paths));
+    }
 }

@@ -15,6 +15,11 @@ pub fn power_heuristic(own: f32, other: f32) -> f32 {
     a * a / (a * a + b * b)
 }
 
+/// The power heuristic (β = 2) applied to one density or density ratio.
+pub fn mis(x: f32) -> f32 {
+    x * x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,15 +10,36 @@
 //! light needs 2. Russian roulette on the throughput ends long paths without
 //! bias.
 
+use super::connect::unoccluded;
 use super::mis::power_heuristic;
+use super::PixelSample;
 use super::ROULETTE_START;
+use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
 use crate::geometry::ray::offset_origin;
 use crate::geometry::Ray;
-use crate::light::{IncidentSample, Light};
-use crate::material::{Bsdf, SurfacePoint, Transport};
+use crate::geometry::SurfacePoint;
+use crate::light::Light;
+use crate::material::{Bsdf, Transport};
 use crate::sampling::Sampler;
 use crate::scene::{Scene, NO_LIGHT};
+
+/// The path tracer and its settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PathTracer {
+    /// The most segments a path may have, the camera ray included.
+    pub max_depth: u32,
+}
+
+impl PathTracer {
+    /// One sample of `pixel`: a jittered camera ray and the radiance along it.
+    pub fn sample(&self, scene: &Scene, camera: &Camera, pixel: PixelSample) -> Rgb {
+        let mut sampler = pixel.camera_sampler();
+        let (jx, jy) = sampler.next_2d();
+        let ray = camera.ray(pixel.x as f32 + jx, pixel.y as f32 + jy);
+        radiance(scene, ray, &mut sampler, self.max_depth)
+    }
+}
 
 /// Radiance arriving at the camera along `ray`.
 pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u32) -> Rgb {
@@ -121,31 +142,4 @@ fn direct_light(
         power_heuristic(light_pdf, bsdf.pdf(wo, sample.wi))
     };
     f * sample.value * (weight / light_pdf)
-}
-
-/// Whether nothing blocks the segment from `surface` to the light sample.
-/// Both ends are moved off their surfaces, so neither can block itself.
-pub fn unoccluded(scene: &Scene, surface: &SurfacePoint, sample: &IncidentSample) -> bool {
-    let origin = offset_origin(
-        surface.position,
-        surface.geometric_normal,
-        sample.wi,
-        surface.magnitude,
-    );
-    let ray = if sample.distance.is_infinite() {
-        Ray::new(origin, sample.wi)
-    } else {
-        let target = if sample.normal == glam::Vec3::ZERO {
-            sample.point
-        } else {
-            offset_origin(sample.point, sample.normal, -sample.wi, sample.magnitude)
-        };
-        let to_target = target - origin;
-        let distance = to_target.length();
-        if distance.is_nan() || distance <= 0.0 {
-            return true;
-        }
-        Ray::segment(origin, to_target / distance, distance)
-    };
-    !scene.occluded(&ray)
 }

@@ -9,19 +9,17 @@
 //! lights `direct` is in the report's unit (d² for point and spot lights),
 //! so that ratios of the two come out right.
 
-use super::{AreaLight, DirectionalLight, Light, PointLight};
+use super::Light;
 use crate::color::Rgb;
-use crate::material::Frame;
-use crate::sampling::warp::{
-    concentric_disk, cosine_hemisphere, uniform_sphere, UNIFORM_SPHERE_PDF,
-};
 use glam::Vec3;
-use std::f32::consts::PI;
 
 /// The start of a light path.
 #[derive(Clone, Copy, Debug)]
 pub struct EmissionSample {
+    /// Where the path starts: on the light, or for a directional light on a
+    /// disk just outside the scene's bounding sphere.
     pub origin: Vec3,
+    /// Unit direction the path leaves in.
     pub dir: Vec3,
     /// Emitted radiance times the cosine at the light (area lights), or
     /// intensity (point, spot), or irradiance (directional).
@@ -41,20 +39,15 @@ pub struct EmissionSample {
 /// Densities of the two light-side strategies for one light point and direction.
 #[derive(Clone, Copy, Debug)]
 pub struct LightPdfs {
+    /// Density of light sampling choosing this point from the receiver: solid
+    /// angle for area lights, d² for point and spot lights, 1 for directional ones.
     pub direct: f32,
+    /// Density of emitting along the connecting direction: position (area
+    /// measure) × direction (solid angle); directional lights: position only.
     pub emission: f32,
+    /// Cosine between the connecting direction and the light's normal; 1 for
+    /// lights that are not surfaces.
     pub cos_light: f32,
-}
-
-fn uniform_cone(cos_max: f32, u: f32, v: f32) -> Vec3 {
-    let z = 1.0 - u * (1.0 - cos_max);
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * v;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
-
-fn uniform_cone_pdf(cos_max: f32) -> f32 {
-    1.0 / (2.0 * PI * (1.0 - cos_max))
 }
 
 impl Light {
@@ -73,49 +66,9 @@ impl Light {
     pub fn sample_emission(&self, u_pos: (f32, f32), u_dir: (f32, f32)) -> Option<EmissionSample> {
         match self {
             Light::Area(l) => l.sample_emission(u_pos, u_dir),
-            Light::Point(PointLight {
-                position,
-                intensity,
-            }) => Some(EmissionSample {
-                origin: *position,
-                dir: uniform_sphere(u_dir.0, u_dir.1),
-                value: *intensity,
-                emission_pdf: UNIFORM_SPHERE_PDF,
-                direct_pdf_area: 1.0,
-                cos_light: 1.0,
-                normal: Vec3::ZERO,
-                magnitude: 0.0,
-            }),
-            Light::Spot(l) => {
-                let local = uniform_cone(l.cos_cone, u_dir.0, u_dir.1);
-                let value = l.intensity * l.falloff(local.z);
-                (value != Rgb::ZERO).then(|| EmissionSample {
-                    origin: l.position,
-                    dir: Frame::new(l.axis).to_world(local),
-                    value,
-                    emission_pdf: uniform_cone_pdf(l.cos_cone),
-                    direct_pdf_area: 1.0,
-                    cos_light: 1.0,
-                    normal: Vec3::ZERO,
-                    magnitude: 0.0,
-                })
-            }
-            Light::Directional(l) => {
-                let frame = Frame::new(l.direction);
-                let d = concentric_disk(u_pos.0, u_pos.1) * l.scene_radius;
-                let origin =
-                    l.scene_center - l.direction * l.scene_radius + frame.s * d.x + frame.t * d.y;
-                Some(EmissionSample {
-                    origin,
-                    dir: l.direction,
-                    value: l.irradiance,
-                    emission_pdf: 1.0 / (PI * l.scene_radius * l.scene_radius),
-                    direct_pdf_area: 1.0,
-                    cos_light: 1.0,
-                    normal: Vec3::ZERO,
-                    magnitude: 0.0,
-                })
-            }
+            Light::Point(l) => Some(l.sample_emission(u_dir)),
+            Light::Spot(l) => l.sample_emission(u_dir),
+            Light::Directional(l) => Some(l.sample_emission(u_pos)),
         }
     }
 
@@ -129,77 +82,11 @@ impl Light {
         area_pdf_solid_angle: f32,
     ) -> LightPdfs {
         match self {
-            Light::Area(l) => {
-                let cos_light = wi.dot(light_normal).abs();
-                LightPdfs {
-                    direct: area_pdf_solid_angle,
-                    emission: l.emission_dir_pdf(cos_light) / l.area,
-                    cos_light,
-                }
-            }
-            Light::Point(_) => LightPdfs {
-                direct: distance * distance,
-                emission: UNIFORM_SPHERE_PDF,
-                cos_light: 1.0,
-            },
-            Light::Spot(l) => LightPdfs {
-                direct: distance * distance,
-                emission: uniform_cone_pdf(l.cos_cone),
-                cos_light: 1.0,
-            },
-            Light::Directional(DirectionalLight { scene_radius, .. }) => LightPdfs {
-                direct: 1.0,
-                emission: 1.0 / (PI * scene_radius * scene_radius),
-                cos_light: 1.0,
-            },
+            Light::Area(l) => l.pdfs_for_incident(wi, light_normal, area_pdf_solid_angle),
+            Light::Point(l) => l.pdfs_for_incident(distance),
+            Light::Spot(l) => l.pdfs_for_incident(distance),
+            Light::Directional(l) => l.pdfs_for_incident(),
         }
-    }
-}
-
-impl AreaLight {
-    /// Density of emitting at `cos_light` from the normal: cosine-weighted,
-    /// split evenly between the faces of a two-sided light.
-    pub fn emission_dir_pdf(&self, cos_light: f32) -> f32 {
-        let sides = if self.two_sided { 0.5 } else { 1.0 };
-        sides * cos_light.abs() / PI
-    }
-
-    /// For a path that hits this light at some point, leaving it along `w`:
-    /// (area density of light sampling, emission density).
-    pub fn pdfs_for_hit(&self, w: Vec3) -> (f32, f32) {
-        let pdf_pos = 1.0 / self.area;
-        (pdf_pos, pdf_pos * self.emission_dir_pdf(w.dot(self.normal)))
-    }
-
-    fn sample_emission(&self, u_pos: (f32, f32), u_dir: (f32, f32)) -> Option<EmissionSample> {
-        let (b1, b2) = crate::sampling::warp::uniform_triangle(u_pos.0, u_pos.1);
-        let origin = self.triangle.point(b1, b2);
-        let (mut u, v) = u_dir;
-        let mut normal = self.normal;
-        if self.two_sided {
-            // Reuse the first number to choose the face, keeping it uniform.
-            if u < 0.5 {
-                u *= 2.0;
-            } else {
-                u = 2.0 * u - 1.0;
-                normal = -normal;
-            }
-        }
-        let local = cosine_hemisphere(u.min(1.0 - f32::EPSILON), v);
-        let cos_light = local.z;
-        if cos_light <= 0.0 {
-            return None;
-        }
-        Some(EmissionSample {
-            origin,
-            dir: Frame::new(normal).to_world(local),
-            value: self.radiance * cos_light,
-            emission_pdf: self.emission_dir_pdf(cos_light) / self.area,
-            direct_pdf_area: 1.0 / self.area,
-            cos_light,
-            normal: self.normal,
-            magnitude: self.magnitude,
-        })
     }
 }
 
@@ -207,7 +94,7 @@ impl AreaLight {
 mod tests {
     use super::*;
     use crate::geometry::Triangle;
-    use crate::light::SpotLight;
+    use crate::light::{AreaLight, DirectionalLight, PointLight, SpotLight};
 
     /// Emission samples carry power: E[value / pdf] over all directions is
     /// the light's flux, which selection by power assumes.

@@ -21,11 +21,16 @@ pub use spot::SpotLight;
 use crate::color::Rgb;
 use glam::Vec3;
 
+/// A light source of the scene, indexed by [`crate::scene::Scene::lights`].
 #[derive(Clone, Debug)]
 pub enum Light {
+    /// Isotropic point light (a delta light).
     Point(PointLight),
+    /// Point light limited to a cone (a delta light).
     Spot(SpotLight),
+    /// Parallel light from infinitely far away (a delta light).
     Directional(DirectionalLight),
+    /// Emissive triangle: the only kind a ray can hit.
     Area(AreaLight),
 }
 
@@ -48,10 +53,14 @@ pub struct IncidentSample {
     pub value: Rgb,
     /// Solid-angle density of this sample; 1 for delta lights.
     pub pdf: f32,
+    /// Whether the light is a delta (point, spot, directional): `pdf` is then 1
+    /// and BSDF sampling can never find it.
     pub delta: bool,
 }
 
 impl Light {
+    /// Whether the light is a delta (point, spot, directional), so paths cannot
+    /// hit it and only light sampling reaches it.
     pub fn is_delta(&self) -> bool {
         !matches!(self, Light::Area(_))
     }

@@ -4,12 +4,15 @@
 use super::Light;
 use crate::sampling::Distribution1D;
 
+/// Chooses a light with probability proportional to its [`Light::power`].
 #[derive(Clone, Debug, Default)]
 pub struct LightSelector {
     distribution: Option<Distribution1D>,
 }
 
 impl LightSelector {
+    /// A selector over `lights`, by index into that slice; it selects nothing
+    /// when no light has positive power.
     pub fn new(lights: &[Light]) -> LightSelector {
         let powers: Vec<f32> = lights.iter().map(Light::power).collect();
         LightSelector {
@@ -22,6 +25,7 @@ impl LightSelector {
         self.distribution.as_ref().map(|d| d.sample(u))
     }
 
+    /// Probability of selecting light `light`; zero when nothing can be selected.
     pub fn pmf(&self, light: usize) -> f32 {
         self.distribution.as_ref().map_or(0.0, |d| d.pmf(light))
     }

@@ -2,16 +2,21 @@
 //! At angle θ from the axis the intensity is
 //! `intensity × smoothstep(cos cone_angle, cos falloff_start, cos θ)`.
 
-use super::IncidentSample;
+use super::{EmissionSample, IncidentSample, LightPdfs};
 use crate::color::{average, Rgb};
+use crate::geometry::Frame;
+use crate::sampling::warp::{uniform_cone, uniform_cone_pdf};
 use glam::Vec3;
 use std::f32::consts::PI;
 
+/// A point light that emits only within a cone around its axis. A delta light.
 #[derive(Clone, Debug)]
 pub struct SpotLight {
+    /// Where the light is, in world space.
     pub position: Vec3,
     /// Unit axis direction.
     pub axis: Vec3,
+    /// Radiant intensity (W/sr per channel) along the axis, before falloff.
     pub intensity: Rgb,
     /// Cosine of the angle from the axis to the cone's edge.
     pub cos_cone: f32,
@@ -41,6 +46,8 @@ impl SpotLight {
         2.0 * PI * average(self.intensity) * (full + ramp)
     }
 
+    /// Light arriving at `receiver`: `value` is intensity × falloff / d², `pdf` 1.
+    /// `None` outside the cone or at the light's position.
     pub fn sample_incident(&self, receiver: Vec3) -> Option<IncidentSample> {
         let to_light = self.position - receiver;
         let d2 = to_light.length_squared();
@@ -63,6 +70,31 @@ impl SpotLight {
             pdf: 1.0,
             delta: true,
         })
+    }
+
+    /// Starts a light path: uniform over the cone, weighted by the falloff.
+    pub fn sample_emission(&self, u_dir: (f32, f32)) -> Option<EmissionSample> {
+        let local = uniform_cone(self.cos_cone, u_dir.0, u_dir.1);
+        let value = self.intensity * self.falloff(local.z);
+        (value != Rgb::ZERO).then(|| EmissionSample {
+            origin: self.position,
+            dir: Frame::new(self.axis).to_world(local),
+            value,
+            emission_pdf: uniform_cone_pdf(self.cos_cone),
+            direct_pdf_area: 1.0,
+            cos_light: 1.0,
+            normal: Vec3::ZERO,
+            magnitude: 0.0,
+        })
+    }
+
+    /// Densities for the light reached from a receiver `distance` away.
+    pub fn pdfs_for_incident(&self, distance: f32) -> LightPdfs {
+        LightPdfs {
+            direct: distance * distance,
+            emission: uniform_cone_pdf(self.cos_cone),
+            cos_light: 1.0,
+        }
     }
 }
 

@@ -7,68 +7,80 @@
 
 mod dielectric;
 mod diffuse;
-mod frame;
 mod mirror;
 pub mod texture;
 
 pub use dielectric::fresnel_dielectric;
-pub use frame::Frame;
 pub use texture::Texture;
 
 use crate::color::Rgb;
-use glam::{Vec2, Vec3};
+use crate::geometry::{Frame, SurfacePoint};
+use glam::Vec3;
 use std::sync::Arc;
 
 /// A diffuse albedo: a constant or an image looked up by UV.
 #[derive(Clone, Debug)]
 pub enum Albedo {
+    /// The same reflectance everywhere, each channel in [0, 1].
     Constant(Rgb),
+    /// An image looked up at the surface point's UV (shared between materials).
     Texture(Arc<Texture>),
 }
 
+/// A surface's material, as the scene names it. Indexed by
+/// [`crate::scene::TriangleShading::material`].
 #[derive(Clone, Debug)]
 pub enum Material {
     /// Lambertian reflection, from both faces.
-    Diffuse { albedo: Albedo },
+    Diffuse {
+        /// Fraction of light reflected, per channel.
+        albedo: Albedo,
+    },
     /// Perfect specular reflection, from both faces.
-    Mirror { reflectance: Rgb },
+    Mirror {
+        /// Fraction of light reflected per channel, in [0, 1].
+        reflectance: Rgb,
+    },
     /// Smooth glass: Fresnel reflection and refraction. The geometric normal
     /// points outside (ior 1) and away from the inside (ior `ior`).
-    Dielectric { ior: f32, transmittance: Rgb },
+    Dielectric {
+        /// Index of refraction inside relative to outside (1.5 for glass); > 0.
+        ior: f32,
+        /// Per-channel factor, in [0, 1], on light each time it refracts;
+        /// reflection is untinted.
+        transmittance: Rgb,
+    },
 }
 
 /// Which quantity a path carries. Radiance (camera paths) and importance (light
 /// paths) scatter differently through refraction: see Veach's thesis, §5.2.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Transport {
+    /// Camera paths (PT, and BDPT's camera subpaths).
     Radiance,
+    /// Light paths, traced from the lights (LT, and BDPT's light subpaths):
+    /// scattering uses the adjoint BSDF.
     Importance,
 }
 
-/// What the integrator knows about a surface point.
-#[derive(Clone, Copy, Debug)]
-pub struct SurfacePoint {
-    pub position: Vec3,
-    /// Unit geometric normal by counter-clockwise winding (the front side).
-    pub geometric_normal: Vec3,
-    /// Unit interpolated shading normal, on the same side as the geometric normal.
-    pub shading_normal: Vec3,
-    pub uv: Vec2,
-    /// Largest coordinate magnitude of the surface's triangle, for ray offsets.
-    pub magnitude: f32,
-}
-
+/// What a [`Bsdf`] scatters with, textures already looked up.
 #[derive(Clone, Copy, Debug)]
 pub enum BsdfKind {
+    /// Lambertian: `f = albedo / π`.
     Diffuse {
+        /// Reflectance per channel at this point (from the texture, if any).
         albedo: Rgb,
     },
+    /// Perfect specular reflection.
     Mirror {
+        /// Fraction reflected per channel, in [0, 1].
         reflectance: Rgb,
     },
     /// `eta` = index on the far side / index on the side of `wo`.
     Dielectric {
+        /// Relative index of refraction across the surface, as seen from `wo`.
         eta: f32,
+        /// Per-channel factor on refracted light, in [0, 1].
         transmittance: Rgb,
     },
 }
@@ -76,6 +88,7 @@ pub enum BsdfKind {
 /// A BSDF at one surface point, oriented to the side its outgoing direction is on.
 #[derive(Clone, Copy, Debug)]
 pub struct Bsdf {
+    /// The lobe and its parameters.
     pub kind: BsdfKind,
     /// Shading frame; its normal is on the side of `wo`.
     frame: Frame,
@@ -86,10 +99,14 @@ pub struct Bsdf {
 /// A sampled direction and its weight `f · |cos θ| / pdf`.
 #[derive(Clone, Copy, Debug)]
 pub struct BsdfSample {
+    /// Sampled incident direction: unit length, world space, pointing away from the surface.
     pub wi: Vec3,
+    /// `f · |cos θi| / pdf`; on light paths it includes the shading-normal correction.
     pub weight: Rgb,
     /// Solid-angle density; for a delta lobe, the probability of choosing that lobe.
     pub pdf: f32,
+    /// Whether `wi` came from a delta lobe (mirror reflection or smooth
+    /// refraction): no other strategy can produce it, and `pdf` is a probability.
     pub delta: bool,
 }
 
@@ -133,16 +150,20 @@ impl Material {
         }
     }
 
+    /// Whether the material scatters only into delta lobes (mirror or glass),
+    /// so light sampling cannot connect to it.
     pub fn is_delta(&self) -> bool {
         !matches!(self, Material::Diffuse { .. })
     }
 }
 
 impl Bsdf {
+    /// Whether the BSDF has only delta lobes, so `eval` and `pdf` are always zero.
     pub fn is_delta(&self) -> bool {
         !matches!(self.kind, BsdfKind::Diffuse { .. })
     }
 
+    /// Unit shading normal, flipped to the side of `wo`.
     pub fn shading_normal(&self) -> Vec3 {
         self.frame.n
     }

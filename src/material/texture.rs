@@ -4,6 +4,7 @@
 use crate::color::Rgb;
 use glam::Vec2;
 
+/// An RGB image sampled by texture coordinates.
 #[derive(Clone, Debug)]
 pub struct Texture {
     width: usize,
@@ -23,6 +24,7 @@ impl Texture {
         }
     }
 
+    /// Width and height, in texels.
     pub fn size(&self) -> (usize, usize) {
         (self.width, self.height)
     }
@@ -33,6 +35,8 @@ impl Texture {
         self.texels[y * self.width + x]
     }
 
+    /// The bilinearly filtered colour at `uv`, wrapping outside [0, 1); (0, 0)
+    /// is the bottom-left corner. A non-finite `uv` gives the top-left texel.
     pub fn lookup(&self, uv: Vec2) -> Rgb {
         // Texel centres sit at half-integers.
         let x = uv.x * self.width as f32 - 0.5;

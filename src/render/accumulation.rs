@@ -3,8 +3,12 @@
 //! by the light paths traced), the noise estimate from the two half
 //! images, and which tiles adaptive sampling may stop.
 
-use super::{Crop, RenderStats, Tile};
-use crate::film::Image;
+use super::pass::light_paths;
+use super::strategies::StrategySums;
+use super::{splat_buffers, tiles, traced_area, RenderStats, Tile};
+use crate::film::{Image, Splat};
+use crate::integrator::StrategySample;
+use crate::settings::{Crop, Settings};
 use glam::DVec3;
 
 /// Samples a tile takes before adaptive sampling may judge its noise: fewer
@@ -34,9 +38,62 @@ pub struct Accumulation {
     /// Light paths traced per half: one per pixel sample taken.
     pub(super) light_paths: [u64; 2],
     pub(super) full_pixels: u64,
+    /// Each BDPT strategy's share, when kept.
+    pub(super) strategies: Option<StrategySums>,
 }
 
 impl Accumulation {
+    /// Nothing yet, for a render of `settings` by an integrator that
+    /// splats or not; `keep_strategies` keeps each strategy's share apart.
+    pub(super) fn new(settings: &Settings, splatting: bool, keep_strategies: bool) -> Accumulation {
+        let (width, height) = (settings.film.width, settings.film.height);
+        let full_pixels = width as u64 * height as u64;
+        Accumulation {
+            width,
+            crop: settings.crop_or_full(),
+            tiles: tiles::split(traced_area(settings, splatting)),
+            splatting,
+            splat_sums: splat_buffers(full_pixels, splatting),
+            light_paths: [0, 0],
+            full_pixels,
+            strategies: keep_strategies.then(|| StrategySums::new(full_pixels as usize)),
+        }
+    }
+
+    /// Pixels the tiles cover (all of them for a splatting integrator).
+    pub(super) fn traced_pixels(&self) -> u64 {
+        self.tiles.iter().map(|t| t.pixel_count() as u64).sum()
+    }
+
+    /// Adds what `tile` splatted while taking samples `first .. first + count`.
+    pub(super) fn add_tile_output(
+        &mut self,
+        tile: &Tile,
+        halves: [(Vec<Splat>, Vec<StrategySample>); 2],
+        first: u32,
+        count: u32,
+    ) {
+        for (h, (splats, _)) in halves.iter().enumerate() {
+            for splat in splats {
+                self.splat_sums[h][splat.pixel as usize] += splat.value.as_dvec3();
+            }
+        }
+        if self.splatting {
+            for (paths, n) in self
+                .light_paths
+                .iter_mut()
+                .zip(light_paths(tile, first, count))
+            {
+                *paths += n;
+            }
+        }
+        if let Some(sums) = self.strategies.as_mut() {
+            for (_, records) in &halves {
+                sums.add(records);
+            }
+        }
+    }
+
     /// The image over the crop, each pixel divided by the samples it got.
     pub fn image(&self) -> Image {
         self.image_of(&[0, 1])

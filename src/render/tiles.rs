@@ -5,33 +5,42 @@
 //! (`--target-noise`). Tiles count their own samples, so a render stopped
 //! in the middle of a pass divides each pixel by the samples it received.
 
-use super::Crop;
+use crate::settings::Crop;
 use glam::DVec3;
 
 /// Small enough for many tiles per thread (load balance), large enough that
 /// per-tile overhead vanishes.
 pub const TILE_SIZE: u32 = 16;
 
+/// A rectangle of pixels, `x0 .. x1` by `y0 .. y1` in image coordinates,
+/// and the sums of the samples its pixels received.
 pub struct Tile {
+    /// Left edge (inclusive), in pixels.
     pub x0: u32,
+    /// Top edge (inclusive), in pixels from the top.
     pub y0: u32,
+    /// Right edge (exclusive).
     pub x1: u32,
+    /// Bottom edge (exclusive).
     pub y1: u32,
     /// Per half (even, odd sample indices), the sum of each pixel's
     /// samples, row-major within the tile.
     sums: [Vec<DVec3>; 2],
     /// Samples each pixel of this tile has received, per half.
     pub samples: [u32; 2],
+    /// Samples whose estimate was NaN or infinite, counted as zero.
     pub discarded: u64,
     /// Adaptive sampling judged this tile's noise low enough: no more samples.
     pub converged: bool,
 }
 
 impl Tile {
+    /// Pixels in the tile.
     pub fn pixel_count(&self) -> usize {
         self.sums[0].len()
     }
 
+    /// Samples each pixel has received, both halves together.
     pub fn spp(&self) -> u32 {
         self.samples[0] + self.samples[1]
     }
@@ -52,7 +61,7 @@ impl Tile {
     }
 
     /// Each pixel's sum over `halves` (both, or one), with (x, y) in image
-    /// coordinates, and the number of samples that sum holds.
+    /// coordinates; [`Tile::samples_in`] tells how many samples the sums hold.
     pub fn pixels<'a>(
         &'a self,
         halves: &'a [usize],
@@ -64,6 +73,7 @@ impl Tile {
         })
     }
 
+    /// Samples each pixel holds in `halves` (0: even sample indices, 1: odd).
     pub fn samples_in(&self, halves: &[usize]) -> u32 {
         halves.iter().map(|&h| self.samples[h]).sum()
     }

@@ -1,5 +1,7 @@
 //! A discrete distribution sampled by inverting its cumulative sum.
 
+/// A discrete distribution over `0..len()`, proportional to non-negative
+/// weights (negative weights count as zero).
 #[derive(Clone, Debug, Default)]
 pub struct Distribution1D {
     /// cdf[i] = sum of weights[..i] / total; cdf.len() = n + 1.
@@ -29,14 +31,17 @@ impl Distribution1D {
         Some(Distribution1D { cdf, pmf })
     }
 
+    /// Number of entries, including zero-weight ones.
     pub fn len(&self) -> usize {
         self.pmf.len()
     }
 
+    /// Whether there are no entries (never true of one built by [`Distribution1D::new`]).
     pub fn is_empty(&self) -> bool {
         self.pmf.is_empty()
     }
 
+    /// Probability of entry `i`. Panics when `i >= len()`.
     pub fn pmf(&self, i: usize) -> f32 {
         self.pmf[i]
     }

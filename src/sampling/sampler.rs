@@ -17,6 +17,7 @@ pub fn hash(mut x: u32) -> u32 {
     x
 }
 
+/// Hash of the pair (`a`, `b`); order matters.
 pub fn hash_combine(a: u32, b: u32) -> u32 {
     hash(a ^ hash(b).wrapping_add(0x9e37_79b9))
 }
@@ -25,6 +26,8 @@ pub fn hash_combine(a: u32, b: u32) -> u32 {
 /// freshly seeded sequence.
 const SEQUENCE_LENGTH: u32 = 1 << 16;
 
+/// The random numbers of one sample of one pixel: successive dimensions of an
+/// Owen-scrambled Sobol sequence, deterministic in (seed, pixel, sample index).
 pub struct Sampler {
     pixel_seed: u32,
     index: u32,

@@ -25,10 +25,13 @@ pub fn cosine_hemisphere(u: f32, v: f32) -> Vec3 {
     Vec3::new(d.x, d.y, z)
 }
 
+/// Solid-angle density of [`cosine_hemisphere`] at angle θ from +z: cos θ / π;
+/// zero below the horizon.
 pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
     cos_theta.max(0.0) * FRAC_1_PI
 }
 
+/// Uniform direction on the unit sphere; `u` sets z (1 at `u` = 0).
 pub fn uniform_sphere(u: f32, v: f32) -> Vec3 {
     let z = 1.0 - 2.0 * u;
     let r = (1.0 - z * z).max(0.0).sqrt();
@@ -36,6 +39,7 @@ pub fn uniform_sphere(u: f32, v: f32) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// Solid-angle density of [`uniform_sphere`]: 1 / 4π.
 pub const UNIFORM_SPHERE_PDF: f32 = 1.0 / (4.0 * PI);
 
 /// Uniform barycentrics (b1, b2) on a triangle, by the square-to-triangle map
@@ -46,4 +50,17 @@ pub fn uniform_triangle(u: f32, v: f32) -> (f32, f32) {
     } else {
         (u, v)
     }
+}
+
+/// Uniform direction in the cone of half-angle acos(`cos_max`) around +z.
+pub fn uniform_cone(cos_max: f32, u: f32, v: f32) -> Vec3 {
+    let z = 1.0 - u * (1.0 - cos_max);
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * v;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Density of [`uniform_cone`] in solid angle.
+pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
+    1.0 / (2.0 * PI * (1.0 - cos_max))
 }

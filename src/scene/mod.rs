@@ -1,25 +1,22 @@
-//! The scene: what the renderer reads ([`format`], [`trs`], [`obj`],
-//! [`texture`]) and the prepared, renderable result ([`Scene`]).
+//! The scene as built: world-space triangles and their shading records,
+//! materials, lights and the BVH over them — what every render of a scene
+//! shares, and what the scene [`cache`] keeps between runs. It is built
+//! from a [`crate::format::SceneDesc`] by [`build`]; what one render does
+//! with it (camera, film, integrator) is [`crate::settings::Settings`].
 
+mod build;
+mod builder;
 pub mod cache;
-pub mod desc;
-pub mod format;
-mod load;
-pub mod obj;
-pub mod texture;
-pub mod trs;
+pub mod estimate;
 
-pub use load::{
-    load, load_cached, load_desc, load_desc_cached, parse_file, Emitter, Geometry, MtlRecord,
-};
+pub use build::{build, load, Emitter, Geometry, MtlRecord};
 
 use crate::bvh::{Hit, WideBvh};
-use crate::camera::Camera;
+use crate::geometry::SurfacePoint;
 use crate::geometry::{Aabb, Ray, Triangle};
 use crate::light::{Light, LightSelector};
-use crate::material::{Material, SurfacePoint};
+use crate::material::Material;
 use crate::pod_array::PodArray;
-use desc::{CameraDesc, Display, IntegratorKind, Tonemap};
 use glam::{Vec2, Vec3};
 use std::path::PathBuf;
 
@@ -34,67 +31,68 @@ pub struct TriangleShading {
     /// Per-vertex shading normals; all zero when the mesh has none (a mesh's
     /// normals are only kept when none of the three is zero).
     pub normals: [Vec3; 3],
+    /// Per-vertex texture coordinates; all zero when the mesh has none.
     pub uvs: [Vec2; 3],
+    /// Index into [`Scene::materials`].
     pub material: u32,
     /// Index into [`Scene::lights`] for emissive triangles, else [`NO_LIGHT`].
     pub light: u32,
 }
 
 impl TriangleShading {
+    /// Whether the triangle has per-vertex shading normals (else it shades flat).
     pub fn has_normals(&self) -> bool {
         self.normals[0] != Vec3::ZERO
     }
 }
 
-/// Render settings after the scene's `film` and `render` blocks and any
-/// command-line overrides.
-#[derive(Clone, Debug)]
-pub struct Settings {
-    pub integrator: IntegratorKind,
-    pub spp: u32,
-    pub time_limit: Option<f32>,
-    pub max_depth: u32,
-    pub seed: u64,
-    pub width: u32,
-    pub height: u32,
-    pub output: PathBuf,
-    pub tonemap: Tonemap,
-    pub exposure: f32,
-}
-
 /// What loading noticed that the user should hear about.
 #[derive(Clone, Debug, Default)]
 pub struct LoadReport {
+    /// Triangles dropped for zero area or non-finite vertices.
     pub degenerate_triangles_dropped: usize,
+    /// Problems that did not stop the load, one line each.
     pub warnings: Vec<String>,
+    /// Wall-clock time of the BVH build, in seconds; zero when it came from the cache.
     pub bvh_build_seconds: f64,
     /// Whether the geometry came from the scene cache.
     pub cache: cache::CacheUse,
 }
 
+/// A built scene, ready to be traced.
 pub struct Scene {
+    /// The scene's name: its `name` key, or the file name without extension.
     pub name: String,
+    /// The scene file it was described in.
     pub file: PathBuf,
-    camera_desc: CameraDesc,
-    pub camera: Camera,
-    pub settings: Settings,
-    pub display: Option<Display>,
+    /// Every triangle, in world space; a [`crate::bvh::Hit`]'s `triangle` indexes it.
     pub triangles: PodArray<Triangle>,
+    /// Shading data of each triangle, by the same index.
     pub shading: PodArray<TriangleShading>,
+    /// The materials, by the index [`TriangleShading::material`] holds.
     pub materials: Vec<Material>,
+    /// Each material's name, by the same index (MTL materials: `mesh.obj:name`).
     pub material_names: Vec<String>,
+    /// Area lights first, one per emissive triangle, then the scene's other lights.
     pub lights: Vec<Light>,
+    /// Chooses a light, in proportion to its power, for light sampling and for
+    /// starting light paths.
     pub light_selector: LightSelector,
+    /// The BVH over `triangles`.
     pub bvh: WideBvh,
+    /// Box around every triangle.
     pub bounds: Aabb,
+    /// What loading noticed.
     pub report: LoadReport,
 }
 
 impl Scene {
+    /// The closest hit with `ray.tmin < t < ray.tmax`, if any.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         self.bvh.intersect(ray)
     }
 
+    /// Whether anything lies on the ray within (`tmin`, `tmax`): for shadow rays.
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.bvh.occluded(ray)
     }
@@ -125,13 +123,5 @@ impl Scene {
             uv: b0 * sh.uvs[0] + b1 * sh.uvs[1] + b2 * sh.uvs[2],
             magnitude: crate::geometry::ray::magnitude(&tri.v),
         }
-    }
-
-    /// Changes the image size, keeping the camera's view.
-    pub fn set_resolution(&mut self, width: u32, height: u32) {
-        self.settings.width = width;
-        self.settings.height = height;
-        self.camera = load::make_camera(&self.camera_desc, width, height)
-            .expect("a camera that was valid stays valid at any resolution");
     }
 }

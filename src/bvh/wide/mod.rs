@@ -37,6 +37,7 @@ const EMPTY_CHILD: u32 = u32::MAX;
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(16))]
 pub struct Node4 {
+    /// Child boxes, one child per lane: minima along x, y, z, then maxima.
     pub bounds: [[f32; 4]; 6],
     /// A node index, `LEAF_BIT | block index`, or `EMPTY_CHILD`.
     pub children: [u32; 4],
@@ -47,6 +48,7 @@ pub struct Node4 {
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(16))]
 pub struct TriangleBlock {
+    /// Vertex positions: `v[vertex][axis][lane]`, in world space.
     pub v: [[[f32; 4]; 3]; 3],
     /// The caller's triangle index of each lane.
     pub id: [u32; 4],
@@ -55,6 +57,7 @@ pub struct TriangleBlock {
 /// What a build produced, for `tracer bench` and `tracer info`.
 #[derive(Clone, Debug, Default)]
 pub struct BuildReport {
+    /// Wall-clock time of the whole build (binary build and collapse), in seconds.
     pub seconds: f64,
     /// SAH cost of the binary BVH before the collapse (one unit per node
     /// visit and per triangle test), comparable with other binary builders.
@@ -62,11 +65,15 @@ pub struct BuildReport {
     /// SAH cost of the wide BVH: one unit per 4-wide node test and per
     /// 4-wide leaf test.
     pub sah_cost: f32,
+    /// Number of 4-wide inner nodes.
     pub nodes: usize,
+    /// Number of leaf blocks (each up to four triangles).
     pub leaves: usize,
+    /// Number of triangles built over.
     pub triangles: usize,
 }
 
+/// The 4-wide BVH the integrators trace, with its triangles in leaf blocks.
 pub struct WideBvh {
     nodes: PodArray<Node4>,
     blocks: PodArray<TriangleBlock>,
@@ -77,10 +84,14 @@ pub struct WideBvh {
 }
 
 impl WideBvh {
+    /// Builds over `triangles` with the default [`BuildOptions`]; hits report
+    /// indices into this slice.
     pub fn build(triangles: &[Triangle]) -> WideBvh {
         WideBvh::build_with(triangles, &BuildOptions::default())
     }
 
+    /// Builds over `triangles`: a binary SAH build with `options` (leaves of at
+    /// most four triangles), collapsed to four wide.
     pub fn build_with(triangles: &[Triangle], options: &BuildOptions) -> WideBvh {
         let start = std::time::Instant::now();
         // Binary leaves must fit one block of four.
@@ -94,18 +105,22 @@ impl WideBvh {
         wide
     }
 
+    /// What the build produced and how long it took.
     pub fn report(&self) -> &BuildReport {
         &self.report
     }
 
+    /// Box around every triangle; [`Aabb::EMPTY`] when there are none.
     pub fn bounds(&self) -> Aabb {
         self.bounds
     }
 
+    /// The inner nodes; children always come after their parent.
     pub fn nodes(&self) -> &[Node4] {
         &self.nodes
     }
 
+    /// The leaf blocks, in leaf order.
     pub fn blocks(&self) -> &[TriangleBlock] {
         &self.blocks
     }

@@ -12,6 +12,8 @@ use crate::bvh::Hit;
 use crate::geometry::Ray;
 use wide::f32x8;
 
+/// The most rays [`WideBvh::intersect_packet`] traces together: one per
+/// 8-wide SIMD lane.
 pub const PACKET_SIZE: usize = 8;
 
 /// The packet's rays across SIMD lanes. Lanes past the packet's length are

@@ -7,9 +7,9 @@ use super::Key;
 use crate::bvh::wide::BuildReport;
 use crate::bvh::WideBvh;
 use crate::color::Rgb;
+use crate::format::desc::{AlbedoDesc, MaterialDesc};
 use crate::geometry::Aabb;
 use crate::pod_array::PodArray;
-use crate::scene::desc::{AlbedoDesc, MaterialDesc};
 use crate::scene::{Emitter, Geometry, MtlRecord, TriangleShading, NO_LIGHT};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -163,26 +163,47 @@ fn mtl_record(m: MtlJson) -> MtlRecord {
 /// Maps an entry and reads its header. `populate` faults every page in at
 /// once, which a full read needs anyway; a listing only touches the
 /// header and metadata.
+///
+/// On a shared (network) filesystem the entry is copied into memory
+/// instead: another machine may replace or truncate it there, and a
+/// truncated mapping kills the process that reads it (SIGBUS). Locally,
+/// writers only ever rename new files into place.
 pub(super) fn open_entry(
     path: &Path,
     populate: bool,
 ) -> Result<(Arc<memmap2::Mmap>, entry::Header), Invalid> {
-    let file = File::open(path)?;
-    if file.metadata()?.len() == 0 {
+    let mut file = crate::files::open_regular(path)?;
+    let length = file.metadata()?.len();
+    if length == 0 {
         return Err(Invalid::Length("empty file".into()));
+    }
+    if super::shared_fs::is_shared(path) {
+        let map = Arc::new(read_into_memory(&mut file, length)?);
+        let header = entry::read_header(&map)?;
+        return Ok((map, header));
+    }
+    let mut options = memmap2::MmapOptions::new();
+    if populate {
+        options.populate();
     }
     // SAFETY: entries are never modified in place: writers create a new
     // file and rename it over the old one, which leaves this mapping's file
     // intact. (Truncating an entry by hand while a render maps it would
     // crash that render, as with any mapped file.)
-    let mut options = memmap2::MmapOptions::new();
-    if populate {
-        options.populate();
-    }
     let map = unsafe { options.map(&file)? };
     let map = Arc::new(map);
     let header = entry::read_header(&map)?;
     Ok((map, header))
+}
+
+/// Copies the whole file into an anonymous mapping (page-aligned, like a
+/// file mapping, so the sections' alignment holds), then seals it read-only.
+fn read_into_memory(file: &mut File, length: u64) -> Result<memmap2::Mmap, Invalid> {
+    use std::io::Read;
+    let length = usize::try_from(length).map_err(|_| Invalid::Length("too large".into()))?;
+    let mut memory = memmap2::MmapMut::map_anon(length)?;
+    file.read_exact(&mut memory)?;
+    Ok(memory.make_read_only()?)
 }
 
 pub(super) fn read_scene_name(path: &Path) -> Result<String, Invalid> {

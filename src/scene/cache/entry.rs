@@ -26,9 +26,11 @@ use bytemuck::Pod;
 use std::io::Write;
 use std::sync::Arc;
 
+/// The first eight bytes of every entry.
 pub const MAGIC: [u8; 8] = *b"TRCACHE\0";
 /// Bump whenever the layout of any section or of the metadata changes.
 pub const FORMAT_VERSION: u32 = 1;
+/// Size of the fixed header, before the section table.
 pub const HEADER_BYTES: usize = 96;
 const TABLE_ROW_BYTES: usize = 16;
 /// Sections start on multiples of this, enough for any record type's alignment.
@@ -39,33 +41,50 @@ const MAX_SECTIONS: u32 = 16;
 /// Why an entry was refused.
 #[derive(Debug, thiserror::Error)]
 pub enum Invalid {
+    /// The file does not start with [`MAGIC`].
     #[error("not a cache entry (bad magic bytes)")]
     Magic,
+    /// Written by another cache format version: the one named.
     #[error("written by cache format {0}, this build reads format {FORMAT_VERSION}")]
     Version(u32),
+    /// The key in the header is not the one the file name says.
     #[error("its key does not match its file name")]
     Key,
+    /// Lengths disagree with each other or with the file's size (the message says which).
     #[error("truncated or oversized: {0}")]
     Length(String),
+    /// The bytes after the header do not match the checksum.
     #[error("checksum mismatch: the payload is corrupt")]
     Checksum,
+    /// Inconsistent in another way, e.g. non-zero reserved bytes, a missing
+    /// section or a wrong record size (the message says what).
     #[error("malformed: {0}")]
     Malformed(String),
+    /// The file could not be read.
     #[error("cannot be read: {0}")]
     Io(#[from] std::io::Error),
 }
 
+/// One row of the section table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SectionInfo {
+    /// What the section holds (a kind number the entry's reader expects in order).
     pub kind: u32,
+    /// Size of one record, in bytes, checked against the record type.
     pub record_bytes: u32,
+    /// Length of the section, in bytes (a multiple of `record_bytes`).
     pub length: u64,
 }
 
+/// An entry's header and section table, as read and checked.
 pub struct Header {
+    /// The cache key the entry was stored under.
     pub key: [u8; 32],
+    /// Bytes after the header and the table: every section with its padding.
     pub payload_length: u64,
+    /// BLAKE3 of every byte after the header.
     pub checksum: [u8; 32],
+    /// The section table, in file order.
     pub sections: Vec<SectionInfo>,
     /// Where each section starts in the file.
     pub offsets: Vec<u64>,
@@ -85,12 +104,16 @@ impl Header {
 
 /// A section to write: its kind and its bytes.
 pub struct Section<'a> {
+    /// What the section holds (checked when it is read back).
     pub kind: u32,
+    /// Size of one record, in bytes.
     pub record_bytes: u32,
+    /// The records, as bytes.
     pub bytes: &'a [u8],
 }
 
 impl<'a> Section<'a> {
+    /// The section of `kind` holding `records`, as bytes.
     pub fn of<T: Pod>(kind: u32, records: &'a [T]) -> Section<'a> {
         Section {
             kind,
@@ -236,6 +259,7 @@ pub struct SectionReader<'h> {
 }
 
 impl<'h> SectionReader<'h> {
+    /// A reader over the sections of `header`, the checked header of `map`.
     pub fn new(map: &'h Arc<memmap2::Mmap>, header: &'h Header) -> Self {
         let mut hasher = blake3::Hasher::new();
         hasher.update(&Header::table_bytes(&header.sections));

@@ -13,9 +13,10 @@
 
 use super::entry::FORMAT_VERSION;
 use crate::bvh::BuildOptions;
-use crate::scene::desc::{SceneDesc, ShapeDesc};
+use crate::format::desc::{SceneDesc, ShapeDesc};
 use std::path::Path;
 
+/// A cache key: the 32-byte BLAKE3 hash of a scene's geometry inputs.
 pub type Key = [u8; 32];
 
 /// The key of `desc`'s geometry; `None` when a mesh file cannot be read (the
@@ -38,7 +39,7 @@ pub fn scene_hash(desc: &SceneDesc) -> Option<Key> {
     let mut h = blake3::Hasher::new();
     h.update(b"tracer scene hash\0");
     hash_geometry_inputs(&mut h, desc, &BuildOptions::default())?;
-    h.update(format!("{:?}|{:?}", desc.camera, desc.lights).as_bytes());
+    h.update(format!("{:?}|{:?}", desc.settings.camera, desc.lights).as_bytes());
     Some(*h.finalize().as_bytes())
 }
 
@@ -89,7 +90,7 @@ fn hash_file(
     mut names: Option<&mut Vec<String>>,
 ) -> std::io::Result<u64> {
     use std::io::Read;
-    let mut file = std::fs::File::open(path)?;
+    let mut file = crate::files::open_regular(path)?;
     let mut buffer = vec![0u8; 1 << 20];
     // The last, unfinished line of the previous chunk.
     let mut carry: Vec<u8> = Vec::new();

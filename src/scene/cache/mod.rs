@@ -14,6 +14,7 @@
 mod contents;
 pub mod entry;
 pub mod key;
+mod shared_fs;
 
 pub use key::{scene_hash, scene_key, Key};
 
@@ -45,6 +46,7 @@ pub enum CacheUse {
     NotStored,
 }
 
+/// The scene cache in one folder (created when first stored to).
 pub struct Cache {
     dir: PathBuf,
     min_triangles: usize,
@@ -53,15 +55,20 @@ pub struct Cache {
 /// One entry, as `tracer cache list` shows it.
 #[derive(Clone, Debug)]
 pub struct EntryInfo {
+    /// The entry's file.
     pub path: PathBuf,
+    /// The key, in hex: the file name without its extension.
     pub key: String,
     /// The scene file that made it, or why the entry cannot be read.
     pub scene: std::result::Result<String, String>,
+    /// Size of the file, in bytes.
     pub bytes: u64,
+    /// The file's modification time, which every use refreshes.
     pub last_used: SystemTime,
 }
 
 impl Cache {
+    /// The cache in `dir`, storing scenes of at least [`DEFAULT_MIN_TRIANGLES`] triangles.
     pub fn new(dir: impl Into<PathBuf>) -> Cache {
         Cache {
             dir: dir.into(),
@@ -84,6 +91,7 @@ impl Cache {
         directories::ProjectDirs::from("", "", "tracer").map(|d| d.cache_dir().to_path_buf())
     }
 
+    /// Where the entry for `key` lives (whether or not it exists).
     pub fn entry_path(&self, key: &Key) -> PathBuf {
         self.dir.join(format!("{}.{EXTENSION}", hex(key)))
     }
@@ -333,6 +341,7 @@ fn is_stale_temp(path: &Path) -> bool {
             .is_some_and(|age| age > Duration::from_secs(3600))
 }
 
+/// `key` as 64 lowercase hex digits.
 pub fn hex(key: &Key) -> String {
     key.iter().map(|b| format!("{b:02x}")).collect()
 }

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Renders the bundled JSON scenes into docs/images/ for the README's gallery:
+# 256 x 256, seed 0, path tracing at 256 spp, the caustic scene with BDPT
+# at 512 spp (path tracing finds its caustics only by chance).
+#
+#   docs/render-gallery.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+cargo build --release
+tracer=target/release/tracer
+mkdir -p docs/images
+
+render() {
+    local name=$1
+    shift
+    echo "== $name"
+    "$tracer" render "scenes/$name.json" -o "docs/images/$name.png" \
+        --width 256 --height 256 --seed 0 -q "$@"
+    # The JSON sidecar records timings that change from run to run; the
+    # gallery keeps only the pictures.
+    rm -f "docs/images/$name.png.json"
+}
+
+render cornell-box --spp 256
+render cornell-caustics --spp 512 --integrator bdpt
+render lights --spp 256
+render textured --spp 256

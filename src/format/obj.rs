@@ -1,0 +1,179 @@
+//! Wavefront OBJ meshes with their MTL materials, through `tobj`.
+//!
+//! MTL materials map onto ours as the scene format says: `Kd`/`map_Kd` →
+//! diffuse, `Ke` → emission, `illum 3`/`5` → mirror, `illum 7` or `d` < 1
+//! with an `Ni` other than 1 → dielectric. (Exporters such as Blender's write
+//! `d 0` with `Ni 1` on opaque materials; a dielectric of index 1 would be
+//! invisible, so that combination stays diffuse.)
+
+use super::desc::{AlbedoDesc, MaterialDesc, MaterialOverride};
+use crate::color::Rgb;
+use crate::files::open_regular;
+use crate::geometry::shapes::MeshData;
+use glam::{Vec2, Vec3};
+use std::io::BufReader;
+use std::path::Path;
+
+/// One part of an OBJ file that uses a single MTL material.
+pub struct ObjGroup {
+    /// Its triangles, in the OBJ file's (object) space.
+    pub mesh: MeshData,
+    /// Its MTL material, converted; `None` when it names none or the MTL file
+    /// could not be read.
+    pub material: Option<MtlMaterial>,
+}
+
+/// An MTL material, converted to one of ours.
+#[derive(Clone, Debug)]
+pub struct MtlMaterial {
+    /// The material's name in the MTL file.
+    pub name: String,
+    /// What it becomes (after any [`MaterialOverride`]).
+    pub desc: MaterialDesc,
+    /// `Ke`, when it is not black.
+    pub emission: Option<Rgb>,
+    /// `Kd`: the albedo to fall back on when `map_Kd` cannot be read.
+    pub kd: Rgb,
+}
+
+/// A loaded OBJ file.
+pub struct ObjFile {
+    /// Its parts, each with a single material, in file order.
+    pub groups: Vec<ObjGroup>,
+    /// What did not load but did not stop the mesh (such as a missing MTL file).
+    pub warnings: Vec<String>,
+}
+
+/// Loads `path`; the error is a message for the caller to place at a key path.
+pub fn load_obj(path: &Path, mtl_override: Option<MaterialOverride>) -> Result<ObjFile, String> {
+    let file =
+        open_regular(path).map_err(|e| format!("cannot read mesh file {}: {e}", path.display()))?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let folder = path.parent().unwrap_or(Path::new("."));
+    // MTL files are named relative to the OBJ's folder, and are opened only
+    // when they are regular files, as the OBJ is.
+    let load_mtl = |name: &Path| {
+        let mtl = open_regular(&folder.join(name)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        tobj::load_mtl_buf(&mut BufReader::new(mtl))
+    };
+    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(file), &options, load_mtl)
+        .map_err(|e| format!("cannot parse mesh file {}: {e}", path.display()))?;
+    let mut warnings = Vec::new();
+    let materials = materials.unwrap_or_else(|e| {
+        warnings.push(format!(
+            "{}: materials not loaded ({e}); using the default material",
+            path.display()
+        ));
+        Vec::new()
+    });
+    let converted: Vec<_> = materials
+        .iter()
+        .map(|m| convert_material(m, folder, mtl_override, &mut warnings))
+        .collect();
+
+    let mut groups = Vec::new();
+    for model in models {
+        let m = model.mesh;
+        let vec3s = |v: &[f32]| {
+            v.chunks_exact(3)
+                .map(|c| Vec3::new(c[0], c[1], c[2]))
+                .collect::<Vec<_>>()
+        };
+        let positions = vec3s(&m.positions);
+        let vertex_count = positions.len();
+        let normals = (m.normals.len() == m.positions.len() && !m.normals.is_empty())
+            .then(|| vec3s(&m.normals));
+        let uvs = (m.texcoords.len() / 2 == vertex_count && vertex_count > 0).then(|| {
+            m.texcoords
+                .chunks_exact(2)
+                .map(|c| Vec2::new(c[0], c[1]))
+                .collect()
+        });
+        if m.indices.iter().any(|&i| i as usize >= vertex_count) {
+            return Err(format!(
+                "mesh file {} has a face index out of range",
+                path.display()
+            ));
+        }
+        let material = m.material_id.and_then(|id| converted.get(id).cloned());
+        groups.push(ObjGroup {
+            mesh: MeshData {
+                positions,
+                normals,
+                uvs,
+                indices: m.indices,
+            },
+            material,
+        });
+    }
+    if groups.iter().all(|g| g.mesh.indices.len() < 3) {
+        warnings.push(format!(
+            "mesh file {} has no triangles (is it an OBJ file?)",
+            path.display()
+        ));
+    }
+    Ok(ObjFile { groups, warnings })
+}
+
+fn convert_material(
+    m: &tobj::Material,
+    folder: &Path,
+    mtl_override: Option<MaterialOverride>,
+    warnings: &mut Vec<String>,
+) -> MtlMaterial {
+    let kd = m.diffuse.map_or(Rgb::splat(0.5), Rgb::from);
+    let kd_clamped = kd.clamp(Rgb::ZERO, Rgb::ONE);
+    if kd_clamped != kd {
+        warnings.push(format!("material {}: Kd clamped to [0, 1]", m.name));
+    }
+    let emission = m
+        .emissive
+        .map(Rgb::from)
+        .filter(|e| e.max_element() > 0.0 && e.min_element() >= 0.0);
+    let desc = match mtl_override {
+        Some(MaterialOverride::Diffuse) => MaterialDesc::Diffuse {
+            albedo: AlbedoDesc::Constant(kd_clamped),
+        },
+        Some(MaterialOverride::Mirror) => MaterialDesc::Mirror {
+            reflectance: kd_clamped,
+        },
+        Some(MaterialOverride::Glass) => MaterialDesc::Dielectric {
+            ior: m.optical_density.filter(|&n| n > 1.0).unwrap_or(1.5),
+            transmittance: kd_clamped,
+        },
+        None => {
+            let illum = m.illumination_model.unwrap_or(0);
+            let ni = m.optical_density.filter(|n| n.is_finite() && *n > 0.0);
+            let translucent = m.dissolve.is_some_and(|d| d < 1.0) && ni.is_some_and(|n| n != 1.0);
+            if illum == 7 || translucent {
+                MaterialDesc::Dielectric {
+                    ior: ni.unwrap_or(1.5),
+                    transmittance: Rgb::ONE,
+                }
+            } else if illum == 3 || illum == 5 {
+                let ks = m.specular.map(Rgb::from).filter(|k| k.max_element() > 0.0);
+                MaterialDesc::Mirror {
+                    reflectance: ks.unwrap_or(Rgb::ONE).clamp(Rgb::ZERO, Rgb::ONE),
+                }
+            } else {
+                let albedo = match &m.diffuse_texture {
+                    Some(t) if !t.is_empty() => {
+                        AlbedoDesc::Texture(folder.join(t.replace('\\', "/")))
+                    }
+                    _ => AlbedoDesc::Constant(kd_clamped),
+                };
+                MaterialDesc::Diffuse { albedo }
+            }
+        }
+    };
+    MtlMaterial {
+        name: m.name.clone(),
+        desc,
+        emission,
+        kd: kd_clamped,
+    }
+}

@@ -1,0 +1,132 @@
+//! Connections between path vertices: shadow rays between two points, and
+//! a light-side point joined to the camera (the t = 1 strategy), with the
+//! camera's importance and density for it.
+
+use crate::camera::Camera;
+use crate::color::Rgb;
+use crate::geometry::ray::offset_origin;
+use crate::geometry::{Ray, SurfacePoint};
+use crate::light::IncidentSample;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// A point a shadow ray can start or end at: its normal (zero for points
+/// not on a surface, such as the camera) and its triangle's coordinate
+/// magnitude, which sets how far it is moved off its surface.
+#[derive(Clone, Copy, Debug)]
+pub struct Endpoint {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub magnitude: f32,
+}
+
+impl Endpoint {
+    pub fn surface(s: &SurfacePoint) -> Endpoint {
+        Endpoint {
+            position: s.position,
+            normal: s.geometric_normal,
+            magnitude: s.magnitude,
+        }
+    }
+
+    pub fn point(position: Vec3) -> Endpoint {
+        Endpoint {
+            position,
+            normal: Vec3::ZERO,
+            magnitude: 0.0,
+        }
+    }
+
+    /// The position moved off its surface towards `toward`.
+    fn lifted(&self, toward: Vec3) -> Vec3 {
+        if self.normal == Vec3::ZERO {
+            self.position
+        } else {
+            offset_origin(self.position, self.normal, toward, self.magnitude)
+        }
+    }
+}
+
+/// Whether the segment between two points is free, each end moved off its surface.
+pub fn visible(scene: &Scene, from: Endpoint, to: Endpoint) -> bool {
+    let dir = to.position - from.position;
+    let origin = from.lifted(dir);
+    let target = to.lifted(-dir);
+    let d = target - origin;
+    let distance = d.length();
+    if distance.is_nan() || distance <= 0.0 {
+        return true;
+    }
+    !scene.occluded(&Ray::segment(origin, d / distance, distance))
+}
+
+/// Whether nothing blocks the segment from `surface` to the light sample.
+/// Both ends are moved off their surfaces, so neither can block itself.
+pub fn unoccluded(scene: &Scene, surface: &SurfacePoint, sample: &IncidentSample) -> bool {
+    let origin = offset_origin(
+        surface.position,
+        surface.geometric_normal,
+        sample.wi,
+        surface.magnitude,
+    );
+    let ray = if sample.distance.is_infinite() {
+        Ray::new(origin, sample.wi)
+    } else {
+        let target = if sample.normal == Vec3::ZERO {
+            sample.point
+        } else {
+            offset_origin(sample.point, sample.normal, -sample.wi, sample.magnitude)
+        };
+        let to_target = target - origin;
+        let distance = to_target.length();
+        if distance.is_nan() || distance <= 0.0 {
+            return true;
+        }
+        Ray::segment(origin, to_target / distance, distance)
+    };
+    !scene.occluded(&ray)
+}
+
+/// What a light-side point at `position` contributes to the pixel it
+/// projects to, given `value` = (light-path weight) × f × cos towards the
+/// camera. Returns the pixel and the factor that turns `value` into a splat:
+/// the camera's importance over the light path count (report §5.1), and the
+/// camera's area density (for MIS, in per-pixel units over the path count).
+pub struct CameraConnection {
+    pub pixel: u32,
+    pub dir_to_camera: Vec3,
+    pub distance: f32,
+    /// (distance to the image point)² / cos at the camera: solid angle to image area.
+    image_to_solid_angle: f32,
+}
+
+impl CameraConnection {
+    pub fn new(camera: &Camera, position: Vec3) -> Option<CameraConnection> {
+        let (x, y) = camera.project(position)?;
+        let to_camera = camera.position - position;
+        let distance = to_camera.length();
+        let dir_to_camera = to_camera / distance;
+        let cos_camera = (-dir_to_camera).dot(camera.forward());
+        if cos_camera <= 0.0 || distance <= 0.0 {
+            return None;
+        }
+        let image_distance = camera.image_plane_distance() / cos_camera;
+        Some(CameraConnection {
+            pixel: y as u32 * camera.width() + x as u32,
+            dir_to_camera,
+            distance,
+            image_to_solid_angle: image_distance * image_distance / cos_camera,
+        })
+    }
+
+    /// The camera's density of choosing this point, in area measure at the
+    /// point whose surface makes `cos_surface` with the direction to the camera.
+    pub fn camera_pdf_area(&self, cos_surface: f32) -> f32 {
+        self.image_to_solid_angle * cos_surface / (self.distance * self.distance)
+    }
+
+    /// Turns `f · cos` (times the path weight) into the splatted value.
+    pub fn splat(&self, value: Rgb, light_paths: f32) -> Rgb {
+        value * (self.image_to_solid_angle / (light_paths * self.distance * self.distance))
+    }
+}

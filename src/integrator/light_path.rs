@@ -1,0 +1,87 @@
+//! Following a light subpath, and joining its vertices to the camera (the
+//! t = 1 strategy). Light tracing and BDPT both walk light paths this way;
+//! they differ only in what they do at each vertex.
+
+use super::connect::{visible, CameraConnection, Endpoint};
+use super::walk::{LightVertex, Walk};
+use crate::camera::Camera;
+use crate::color::{is_black, Rgb};
+use crate::geometry::Ray;
+use crate::material::Transport;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+/// Continues `walk` from a light, calling `visit` at every vertex that is
+/// not a delta (the vertices a connection can reach), until the path would
+/// need more than `max_depth` segments to reach the camera, leaves the
+/// scene, or ends by Russian roulette.
+pub fn follow_light_walk(
+    scene: &Scene,
+    sampler: &mut Sampler,
+    mut walk: Walk,
+    max_depth: u32,
+    mut visit: impl FnMut(&LightVertex),
+) {
+    loop {
+        // A vertex here is walk.length segments from the light, and one more to the camera.
+        if walk.length + 1 > max_depth {
+            break;
+        }
+        let ray = Ray::new(walk.origin, walk.dir);
+        let Some(hit) = scene.intersect(&ray) else {
+            break;
+        };
+        let surface = scene.surface(&hit);
+        let wo = -ray.dir;
+        walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
+        let material = &scene.materials[scene.shading[hit.triangle as usize].material as usize];
+        let bsdf = material.bsdf(&surface, wo);
+
+        if !bsdf.is_delta() {
+            visit(&LightVertex {
+                surface,
+                bsdf,
+                wo,
+                throughput: walk.throughput,
+                length: walk.length,
+                d_vcm: walk.d_vcm,
+                d_vc: walk.d_vc,
+            });
+        }
+        // A further vertex would need at least one more segment to reach the camera.
+        if walk.length + 2 > max_depth {
+            break;
+        }
+        sampler.start_vertex();
+        if !walk.scatter(&bsdf, &surface, wo, sampler, Transport::Importance) {
+            break;
+        }
+        walk.length += 1;
+    }
+}
+
+/// A light vertex seen by the camera: where it lands, and its splat before
+/// any MIS weight (`None` when it is outside the image, behind the camera,
+/// occluded, or reflects nothing towards the camera).
+pub fn camera_splat(
+    scene: &Scene,
+    camera: &Camera,
+    v: &LightVertex,
+    light_paths: f32,
+) -> Option<(CameraConnection, Rgb)> {
+    let c = CameraConnection::new(camera, v.surface.position)?;
+    let f = v
+        .bsdf
+        .eval_mode(v.wo, c.dir_to_camera, Transport::Importance);
+    if is_black(f)
+        || !visible(
+            scene,
+            Endpoint::surface(&v.surface),
+            Endpoint::point(camera.position),
+        )
+    {
+        return None;
+    }
+    let value = c.splat(v.throughput * f, light_paths);
+    Some((c, value))
+}

@@ -1,0 +1,117 @@
+//! One pass: every tile not yet done takes the same run of samples, tiles
+//! in parallel, and what they splat is merged in tile order.
+
+use super::progress::Progress;
+use super::tiles::{self, Tile};
+use super::Accumulation;
+use crate::camera::Camera;
+use crate::color::is_finite;
+use crate::film::Splat;
+use crate::integrator::{Integrator, PixelSample, SampleSink, StrategySample, ThreadState};
+use crate::scene::Scene;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Tiles per batch for the splatting integrators: bounds the splat lists held
+/// at once (a few MB) while leaving enough tiles to keep every thread busy.
+const SPLAT_BATCH: usize = 64;
+
+/// What one tile hands back: its splats and strategy records, per half.
+type TileOutput = [(Vec<Splat>, Vec<StrategySample>); 2];
+
+pub(super) struct Pass<'a> {
+    pub scene: &'a Scene,
+    pub camera: &'a Camera,
+    pub integrator: &'a Integrator,
+    pub seed: u64,
+    /// Samples `first .. first + count` of every pixel.
+    pub first: u32,
+    pub count: u32,
+    pub keep_strategies: bool,
+    pub progress: &'a Progress,
+}
+
+impl Pass<'_> {
+    /// Runs the pass over `acc`'s tiles; a tile for which `skip` says so
+    /// (checked as it starts) takes no samples.
+    pub fn run(
+        &self,
+        pool: &rayon::ThreadPool,
+        acc: &mut Accumulation,
+        skip: &(impl Fn() -> bool + Sync),
+    ) {
+        let batch = if acc.splatting {
+            SPLAT_BATCH
+        } else {
+            acc.tiles.len().max(1)
+        };
+        let mut tiles = std::mem::take(&mut acc.tiles);
+        for chunk in tiles.chunks_mut(batch) {
+            let outputs: Vec<Option<TileOutput>> = pool.install(|| {
+                chunk
+                    .par_iter_mut()
+                    .map(|tile| {
+                        if skip() || tile.converged {
+                            return None;
+                        }
+                        Some(self.tile(tile))
+                    })
+                    .collect()
+            });
+            for (tile, output) in chunk.iter().zip(outputs) {
+                if let Some(output) = output {
+                    acc.add_tile_output(tile, output, self.first, self.count);
+                }
+            }
+        }
+        acc.tiles = tiles;
+    }
+
+    /// Adds this pass's samples to every pixel of `tile`.
+    fn tile(&self, tile: &mut Tile) -> TileOutput {
+        let sink = || SampleSink {
+            strategies: self.keep_strategies.then(Vec::new),
+            ..SampleSink::default()
+        };
+        let mut sinks = [sink(), sink()];
+        let mut state = ThreadState::default();
+        for y in tile.y0..tile.y1 {
+            for x in tile.x0..tile.x1 {
+                let mut sums = [DVec3::ZERO; 2];
+                for index in self.first..self.first + self.count {
+                    let half = (index % 2) as usize;
+                    let pixel = PixelSample {
+                        x,
+                        y,
+                        index: index as u64,
+                        seed: self.seed,
+                    };
+                    let l = self.integrator.sample(
+                        self.scene,
+                        self.camera,
+                        pixel,
+                        &mut state,
+                        &mut sinks[half],
+                    );
+                    if is_finite(l) {
+                        sums[half] += l.as_dvec3();
+                    } else {
+                        tile.discarded += 1;
+                    }
+                }
+                tile.add(x, y, sums);
+            }
+        }
+        tile.count_samples(self.first, self.count);
+        tile.discarded += sinks[0].discarded + sinks[1].discarded;
+        self.progress
+            .advance(tile.pixel_count() as u64 * self.count as u64);
+        sinks.map(|s| (s.splats, s.strategies.unwrap_or_default()))
+    }
+}
+
+/// Light paths added to each half by `tile` taking samples `first .. first + count`.
+pub(super) fn light_paths(tile: &Tile, first: u32, count: u32) -> [u64; 2] {
+    let n = tile.pixel_count() as u64;
+    tiles::halves(first, count).map(|k| n * k as u64)
+}

@@ -1,0 +1,129 @@
+//! PT, LT and BDPT are independent unbiased estimators of the same image:
+//! on every scene all three can render, their images must agree within
+//! statistical error, block by block (borders included, where mis-scaled
+//! light-tracing splats would show first).
+
+use crate::common::{self, assert_agree, block_stats, write_scene, BlockStats};
+use tracer::settings::IntegratorKind;
+
+/// Per-block comparisons are many (blocks × channels × pairs); five standard
+/// errors keeps the chance of a false alarm below one in ten thousand.
+const Z: f64 = 5.0;
+
+/// Independent renders per estimate. Light-transport estimators have heavy
+/// tails (rare, bright paths), so the variance estimate needs many of them.
+const SEEDS: u64 = 16;
+
+/// Blocks of 8 × 8 pixels: each block of each render pools enough samples
+/// that its mean is close to normal.
+const BLOCK: u32 = 8;
+
+fn stats(path: &std::path::Path, integrator: IntegratorKind, size: u32, spp: u32) -> BlockStats {
+    let (scene, mut settings) = common::load_scene(path);
+    settings.film.width = size;
+    settings.film.height = size;
+    settings.integrator = integrator;
+    settings.stop.spp = spp;
+    let s = block_stats(&scene, &settings, SEEDS, BLOCK);
+    assert_eq!(
+        s.discarded, 0,
+        "{integrator:?} produced NaN or infinite samples"
+    );
+    s
+}
+
+fn all_three_agree(path: &std::path::Path, size: u32, spp: [u32; 3]) {
+    let _guard = common::heavy();
+    let name = path.file_name().unwrap().to_string_lossy().into_owned();
+    let pt = stats(path, IntegratorKind::Pt, size, spp[0]);
+    let lt = stats(path, IntegratorKind::Lt, size, spp[1]);
+    let bdpt = stats(path, IntegratorKind::Bdpt, size, spp[2]);
+    assert_agree(&pt, &lt, Z, &format!("{name}: pt vs lt"));
+    assert_agree(&pt, &bdpt, Z, &format!("{name}: pt vs bdpt"));
+    assert_agree(&lt, &bdpt, Z, &format!("{name}: lt vs bdpt"));
+}
+
+#[test]
+fn cornell_box() {
+    all_three_agree(
+        &common::repo().join("scenes/cornell-box.json"),
+        32,
+        [16, 16, 8],
+    );
+}
+
+#[test]
+fn textured_scene() {
+    all_three_agree(
+        &common::repo().join("scenes/textured.json"),
+        32,
+        [16, 16, 8],
+    );
+}
+
+/// The caustic scene's glass and mirror are seen directly, which a light
+/// tracer cannot render; PT and BDPT must still agree.
+#[test]
+fn caustics_pt_and_bdpt() {
+    let _guard = common::heavy();
+    let path = common::repo().join("scenes/cornell-caustics.json");
+    let pt = stats(&path, IntegratorKind::Pt, 32, 32);
+    let bdpt = stats(&path, IntegratorKind::Bdpt, 32, 16);
+    assert_agree(&pt, &bdpt, Z, "caustics: pt vs bdpt");
+}
+
+const ROOM: &str = r#"
+  "camera": {"position": [0, 1, -3.2], "look_at": [0, 0.8, 0], "fov": 55},
+  "materials": {
+    "white": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]},
+    "red": {"type": "diffuse", "albedo": [0.8, 0.2, 0.1]}
+  },
+  "objects": [
+    {"type": "quad", "material": "white", "transform": {"scale": 6}},
+    {"type": "quad", "material": "red", "transform": {"scale": 6, "rotate": [1, 0, 0, -90], "translate": [0, 3, 2]}},
+    {"type": "cube", "material": "white", "transform": {"scale": [0.6, 1.2, 0.6], "rotate": [0, 1, 0, 25], "translate": [0.7, 0.6, 0.6]}},
+    {"type": "sphere", "center": [-0.6, 0.5, 0.2], "radius": 0.5, "subdivisions": 1, "material": "white"}
+  ],"#;
+
+fn room(lights: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let json = format!("{{{ROOM} \"lights\": [{lights}]}}");
+    let path = write_scene(dir.path(), "room.json", &json);
+    (dir, path)
+}
+
+/// Delta lights: every integrator must weigh them right (BSDF sampling can
+/// never hit them, nor can a camera path end on them). The low-poly sphere's
+/// smooth normals differ from its facets, which exercises the shading-normal
+/// correction of light paths.
+#[test]
+fn spot_light_only() {
+    let (_dir, path) = room(
+        r#"{"type": "spot", "position": [0.2, 2.6, -0.5], "look_at": [0, 0, 0.3], "intensity": [30, 28, 25],
+            "cone_angle": 45, "falloff_start": 25}"#,
+    );
+    all_three_agree(&path, 32, [16, 16, 8]);
+}
+
+#[test]
+fn directional_light_only() {
+    let (_dir, path) =
+        room(r#"{"type": "directional", "direction": [0.4, -1, 0.5], "irradiance": [3, 3, 2.5]}"#);
+    all_three_agree(&path, 32, [16, 16, 8]);
+}
+
+#[test]
+fn point_and_area_lights_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = format!(
+        r#"{{{ROOM} "lights": [{{"type": "point", "position": [-1, 2, -1], "intensity": [8, 8, 8]}}]}}"#
+    )
+    .replacen(
+        r#""objects": ["#,
+        r#""objects": [{"type": "quad", "material": "white", "emission": [6, 5, 4],
+                        "transform": {"scale": 0.8, "rotate": [1, 0, 0, 180], "translate": [0, 2.9, 0.5]}},"#,
+        1,
+    );
+    let path = write_scene(dir.path(), "room.json", &json);
+    all_three_agree(&path, 32, [16, 16, 8]);
+}

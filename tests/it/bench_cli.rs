@@ -1,0 +1,126 @@
+//! `tracer bench`: identical rays from a file give checkable answers, and
+//! generated ray sets are reported for every kind and thread count.
+
+use crate::common::{self, tracer};
+
+fn record(o: [f32; 3], tmin: f32, d: [f32; 3], tmax: f32) -> Vec<u8> {
+    [o[0], o[1], o[2], tmin, d[0], d[1], d[2], tmax]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect()
+}
+
+#[test]
+fn rays_file_hits_and_distances() {
+    let _guard = common::heavy();
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("square.obj");
+    // A unit square in the plane z = 2.
+    std::fs::write(
+        &mesh,
+        "v 0 0 2\nv 1 0 2\nv 1 1 2\nv 0 1 2\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let rays = dir.path().join("probe.rays");
+    let mut bytes = Vec::new();
+    bytes.extend(record([0.5, 0.5, 0.0], 0.0, [0.0, 0.0, 1.0], f32::INFINITY)); // hit at 2
+    bytes.extend(record([0.25, 0.5, -1.0], 0.0, [0.0, 0.0, 1.0], 10.0)); // hit at 3
+    bytes.extend(record([0.5, 0.5, 0.0], 0.0, [0.0, 0.0, 1.0], 1.5)); // stops short
+    bytes.extend(record([0.5, 0.5, 0.0], 2.5, [0.0, 0.0, 1.0], 9.0)); // starts past it
+    bytes.extend(record([3.0, 0.5, 0.0], 0.0, [0.0, 0.0, 1.0], 9.0)); // beside it
+    std::fs::write(&rays, &bytes).unwrap();
+    let out = tracer()
+        .args([
+            "bench",
+            "--json",
+            "--runs",
+            "1",
+            "--threads",
+            "1,2",
+            "--rays-file",
+        ])
+        .arg(&rays)
+        .arg(&mesh)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["triangles"], 2);
+    let traces = report["traces"].as_array().unwrap();
+    assert_eq!(traces.len(), 4, "closest and any, for 1 and 2 threads");
+    for t in traces {
+        assert_eq!(t["rays"], "probe");
+        assert_eq!(t["count"], 5);
+        assert_eq!(t["hits"], 2, "{t}");
+        if t["query"] == "closest" {
+            assert_eq!(t["distance_sum"].as_f64().unwrap(), 5.0);
+        }
+        assert!(t["mrays_per_second"].as_f64().unwrap() > 0.0);
+    }
+    assert!(report["bytes_per_triangle"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn generated_ray_sets_on_a_scene() {
+    let _guard = common::heavy();
+    let out = tracer()
+        .args([
+            "bench",
+            "scenes/cornell-box.json",
+            "--runs",
+            "1",
+            "--threads",
+            "1",
+        ])
+        .args(["--rays", "primary", "--rays", "shadow"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("32 triangles"), "{table}");
+    // The scene's own camera at 1024 × 1024 looks into the open box: most
+    // rays hit, and closest-hit and any-hit agree on which.
+    let hits = |query: &str| -> Vec<u64> {
+        let line = table
+            .lines()
+            .find(|l| l.starts_with("primary") && l.contains(query))
+            .unwrap();
+        let columns: Vec<&str> = line.split_whitespace().collect();
+        vec![columns[3].parse().unwrap(), columns[5].parse().unwrap()]
+    };
+    let (closest, any) = (hits("closest"), hits("any"));
+    assert_eq!(closest[0], 1024 * 1024);
+    assert!(closest[1] > 900_000 && closest[1] < closest[0], "{table}");
+    assert_eq!(closest, any);
+    assert!(table.lines().any(|l| l.starts_with("shadow")), "{table}");
+    assert!(
+        !table.lines().any(|l| l.starts_with("incoherent")),
+        "{table}"
+    );
+}
+
+#[test]
+fn a_truncated_rays_file_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let rays = dir.path().join("bad.rays");
+    std::fs::write(&rays, [0u8; 33]).unwrap();
+    let out = tracer()
+        .args(["bench", "scenes/cornell-box.json", "--rays-file"])
+        .arg(&rays)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("bad.rays") && stderr.contains("32-byte"),
+        "{stderr}"
+    );
+}

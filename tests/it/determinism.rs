@@ -1,0 +1,88 @@
+//! The image is a pure function of scene, settings and seed.
+
+use crate::common;
+use tracer::render::{render, RenderOptions};
+use tracer::scene::Scene;
+use tracer::settings::Settings;
+
+fn cornell(seed: u64) -> (Scene, Settings) {
+    let (scene, mut settings) = common::load_scene("scenes/cornell-caustics.json");
+    settings.film.width = 40;
+    settings.film.height = 36;
+    settings.stop.spp = 6;
+    settings.seed = seed;
+    (scene, settings)
+}
+
+#[test]
+fn same_seed_same_image_for_any_thread_count() {
+    let _guard = common::heavy();
+    let (scene, settings) = cornell(5);
+    let images: Vec<_> = [1, 2, 3]
+        .iter()
+        .map(|&threads| {
+            let options = RenderOptions {
+                threads: Some(threads),
+                progress: false,
+                ..RenderOptions::default()
+            };
+            render(&scene, &settings, &options).unwrap().0
+        })
+        .collect();
+    assert!(images[0].mean().x > 0.0);
+    let bits = |i: &tracer::film::Image| {
+        i.pixels
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&images[0]), bits(&images[1]), "1 vs 2 threads");
+    assert_eq!(bits(&images[0]), bits(&images[2]), "1 vs 3 threads");
+}
+
+#[test]
+fn adaptive_renders_and_sample_offsets_are_the_same_for_any_thread_count() {
+    use tracer::settings::IntegratorKind;
+    let _guard = common::heavy();
+    for integrator in [IntegratorKind::Pt, IntegratorKind::Bdpt, IntegratorKind::Lt] {
+        let (scene, mut settings) = cornell(3);
+        settings.integrator = integrator;
+        settings.stop.spp = 1 << 12;
+        settings.sample_offset = 5;
+        settings.stop.target_noise = Some(0.3);
+        settings.stop.adaptive = integrator != IntegratorKind::Lt;
+        let results: Vec<_> = [1, 3]
+            .iter()
+            .map(|&threads| {
+                let options = RenderOptions {
+                    threads: Some(threads),
+                    ..RenderOptions::default()
+                };
+                render(&scene, &settings, &options).unwrap()
+            })
+            .collect();
+        let (a, b) = (&results[0], &results[1]);
+        assert!(
+            a.0 == b.0,
+            "{integrator:?}: the image depends on the thread count"
+        );
+        assert_eq!(
+            (a.1.spp, a.1.max_spp),
+            (b.1.spp, b.1.max_spp),
+            "{integrator:?}"
+        );
+    }
+}
+
+#[test]
+fn different_seeds_give_different_noise() {
+    let _guard = common::heavy();
+    let image = |(scene, settings): (Scene, Settings)| {
+        render(&scene, &settings, &RenderOptions::default())
+            .unwrap()
+            .0
+    };
+    let a = image(cornell(1));
+    let b = image(cornell(2));
+    assert_ne!(a, b);
+}
