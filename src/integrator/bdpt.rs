@@ -2,7 +2,7 @@
 //! 1993) with every connection strategy weighted by the power heuristic.
 //!
 //! Each sample traces a light subpath (splatting its t = 1 connections to the
-//! camera, see `subpath.rs`) and a camera subpath, whose vertices take the
+//! camera, see `light_path.rs`) and a camera subpath, whose vertices take the
 //! remaining strategies: s = 0 (the camera path hits an emitter), s = 1
 //! (a point sampled on a light) and s > 1 (a connection to each stored light
 //! vertex). The weights come from the running quantities of Georgiev's report
