@@ -7,6 +7,9 @@
 
 pub mod desc;
 pub mod json;
+mod json_lights;
+mod json_materials;
+mod json_objects;
 pub mod obj;
 mod sections;
 pub mod trs;

@@ -1,0 +1,88 @@
+//! The `lights` section of a JSON scene: point, spot and directional lights.
+
+use super::desc::*;
+use super::json::Ctx;
+use crate::Result;
+use serde::Deserialize;
+use serde_json::Value;
+
+impl Ctx<'_> {
+    pub(super) fn light(&self, value: &Value, path: &str) -> Result<LightDesc> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Point {
+            position: V3,
+            intensity: Color,
+        }
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Spot {
+            position: V3,
+            look_at: V3,
+            intensity: Color,
+            #[serde(default)]
+            cone_angle: Option<Positive>,
+            #[serde(default)]
+            falloff_start: Option<Finite>,
+        }
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Directional {
+            direction: V3,
+            irradiance: Color,
+        }
+        let (kind, map) = self.tagged(value, path, &["point", "spot", "directional"])?;
+        let map = Value::Object(map);
+        Ok(match kind.as_str() {
+            "point" => {
+                let p: Point = self.typed(map, path)?;
+                LightDesc::Point {
+                    position: p.position.0,
+                    intensity: p.intensity.0,
+                }
+            }
+            "spot" => {
+                let s: Spot = self.typed(map, path)?;
+                let cone = s.cone_angle.map_or(30.0, |c| c.0);
+                if cone > 180.0 {
+                    return Err(self.err(
+                        &format!("{path}.cone_angle"),
+                        format!("expected at most 180 degrees, found {cone}"),
+                    ));
+                }
+                let start = s.falloff_start.map_or(cone, |f| f.0);
+                if !(0.0..=cone).contains(&start) {
+                    return Err(self.err(
+                        &format!("{path}.falloff_start"),
+                        format!(
+                            "expected between 0 and cone_angle ({cone}) degrees, found {start}"
+                        ),
+                    ));
+                }
+                if (s.look_at.0 - s.position.0).length_squared() == 0.0 {
+                    return Err(self.err(&format!("{path}.look_at"), "must differ from position"));
+                }
+                LightDesc::Spot {
+                    position: s.position.0,
+                    look_at: s.look_at.0,
+                    intensity: s.intensity.0,
+                    cone_angle: cone,
+                    falloff_start: start,
+                }
+            }
+            _ => {
+                let d: Directional = self.typed(map, path)?;
+                if d.direction.0.length_squared() == 0.0 {
+                    return Err(self.err(
+                        &format!("{path}.direction"),
+                        "expected a non-zero direction",
+                    ));
+                }
+                LightDesc::Directional {
+                    direction: d.direction.0,
+                    irradiance: d.irradiance.0,
+                }
+            }
+        })
+    }
+}

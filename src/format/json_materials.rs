@@ -1,0 +1,84 @@
+//! The `materials` section of a JSON scene: each material by its `type`.
+
+use super::desc::*;
+use super::json::kind_of;
+use super::json::Ctx;
+use super::resolve;
+use crate::Result;
+use glam::Vec3;
+use serde::Deserialize;
+use serde_json::Value;
+
+impl Ctx<'_> {
+    pub(super) fn material(&self, value: &Value, path: &str) -> Result<MaterialDesc> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Diffuse {
+            #[serde(default)]
+            albedo: Option<Value>,
+        }
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Mirror {
+            #[serde(default)]
+            reflectance: Option<Reflectance>,
+        }
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Dielectric {
+            #[serde(default)]
+            ior: Option<Positive>,
+            #[serde(default)]
+            transmittance: Option<Reflectance>,
+        }
+        let (kind, map) = self.tagged(value, path, &["diffuse", "mirror", "dielectric"])?;
+        let map = Value::Object(map);
+        Ok(match kind.as_str() {
+            "diffuse" => {
+                let d: Diffuse = self.typed(map, path)?;
+                let albedo = match d.albedo {
+                    None => AlbedoDesc::Constant(glam::Vec3::splat(0.5)),
+                    Some(v) => self.albedo(v, &format!("{path}.albedo"))?,
+                };
+                MaterialDesc::Diffuse { albedo }
+            }
+            "mirror" => {
+                let m: Mirror = self.typed(map, path)?;
+                MaterialDesc::Mirror {
+                    reflectance: m.reflectance.map_or(Vec3::ONE, |r| r.0),
+                }
+            }
+            _ => {
+                let d: Dielectric = self.typed(map, path)?;
+                MaterialDesc::Dielectric {
+                    ior: d.ior.map_or(1.5, |x| x.0),
+                    transmittance: d.transmittance.map_or(Vec3::ONE, |r| r.0),
+                }
+            }
+        })
+    }
+
+    fn albedo(&self, value: Value, path: &str) -> Result<AlbedoDesc> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct TextureRef {
+            texture: String,
+        }
+        match value {
+            Value::Object(_) => {
+                let t: TextureRef = self.typed(value, path)?;
+                Ok(AlbedoDesc::Texture(resolve(self.file, &t.texture)))
+            }
+            Value::Array(_) => Ok(AlbedoDesc::Constant(
+                self.typed::<Reflectance>(value, path)?.0,
+            )),
+            other => Err(self.err(
+                path,
+                format!(
+                    "expected an RGB colour or {{\"texture\": file}}, found {}",
+                    kind_of(&other)
+                ),
+            )),
+        }
+    }
+}
