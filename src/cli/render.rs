@@ -267,6 +267,15 @@ pub fn run_render(args: &RenderArgs) -> Result<i32> {
     let (image, stats) =
         render_with_checkpoints(&scene, &settings, &options, &hash, args, &mut window)?;
     let s = &settings;
+    // Interrupted before every pixel had a sample: such an image is mostly
+    // black, and worth less than whatever the output held before.
+    if stats.stopped_by == StopReason::Interrupted && stats.spp == 0 {
+        eprintln!(
+            "interrupted before the first pass completed: {} was not written (a previous file there is kept)",
+            s.film.output.display()
+        );
+        return Ok(INTERRUPTED_EXIT);
+    }
     let m = metadata(s, &hash, &stats, true);
     write_image_with(
         &s.film.output,

@@ -38,7 +38,11 @@ pub fn read_pfm(path: &Path) -> Result<Image> {
         return Err(bad("big-endian PFM is not supported"));
     }
     let data = &bytes[start..];
-    if data.len() != w as usize * h as usize * 12 {
+    // Checked: 2^31 × 2^31 × 12 wraps to 0, the length of no data at all.
+    let expected = (w as usize)
+        .checked_mul(h as usize)
+        .and_then(|n| n.checked_mul(12));
+    if expected != Some(data.len()) {
         return Err(bad("pixel data has the wrong length"));
     }
     let mut image = Image::new(w, h);
@@ -60,6 +64,7 @@ pub fn read_with_metadata(path: &Path) -> Result<(Image, Metadata)> {
     match ImageFormat::from_path(path) {
         Some(ImageFormat::Exr) => {
             use exr::prelude::*;
+            check_exr_size(path).map_err(bad)?;
             let image = read()
                 .no_deep_data()
                 .largest_resolution_level()
@@ -174,9 +179,29 @@ fn srgb_decode(v: u16) -> f32 {
     }
 }
 
+/// Refuses an EXR whose header claims more pixels than any image a render
+/// makes ([`crate::settings::MAX_PIXELS`]), before decoding it: the decoder
+/// allocates what the header says, and a few damaged bytes can claim
+/// terabytes.
+fn check_exr_size(path: &Path) -> std::result::Result<(), String> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("cannot decode: {e}"))?;
+    for header in meta.headers.iter() {
+        let (w, h) = (header.layer_size.width(), header.layer_size.height());
+        if (w as u64).saturating_mul(h as u64) > crate::settings::MAX_PIXELS {
+            return Err(format!(
+                "its header claims {w} x {h} pixels, more than the {} an image can have",
+                crate::settings::MAX_PIXELS
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The first RGB(A) layer of an EXR file, linear, top row first.
 fn read_exr(path: &Path) -> std::result::Result<Image, String> {
     use exr::prelude::*;
+    check_exr_size(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let image = read_first_rgba_layer_from_file(
         path,
         |resolution, _| {

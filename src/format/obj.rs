@@ -11,7 +11,7 @@ use crate::color::Rgb;
 use crate::files::open_regular;
 use crate::geometry::shapes::MeshData;
 use glam::{Vec2, Vec3};
-use std::io::BufReader;
+use std::io::{BufReader, Read};
 use std::path::Path;
 
 /// One part of an OBJ file that uses a single MTL material.
@@ -57,11 +57,30 @@ pub fn load_obj(path: &Path, mtl_override: Option<MaterialOverride>) -> Result<O
     // MTL files are named relative to the OBJ's folder, and are opened only
     // when they are regular files, as the OBJ is.
     let load_mtl = |name: &Path| {
-        let mtl = open_regular(&folder.join(name)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
-        tobj::load_mtl_buf(&mut BufReader::new(mtl))
+        let mut mtl =
+            open_regular(&folder.join(name)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let mut bytes = Vec::new();
+        mtl.read_to_end(&mut bytes)
+            .map_err(|_| tobj::LoadError::ReadError)?;
+        tobj::load_mtl_buf(&mut BufReader::new(&complete_colours(bytes)[..]))
     };
-    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(file), &options, load_mtl)
-        .map_err(|e| format!("cannot parse mesh file {}: {e}", path.display()))?;
+    // tobj computes texture-coordinate and normal offsets from a face's
+    // indices unchecked: a relative index before the first `vt`/`vn`
+    // (`f 1//-2`) overflows, which panics where overflow is
+    // checked (debug and test builds; release builds wrap, to an
+    // out-of-bounds error or another vertex's normal). A panic in the
+    // parser is a file it cannot read.
+    let parsed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        tobj::load_obj_buf(&mut BufReader::new(file), &options, load_mtl)
+    }))
+    .map_err(|_| {
+        format!(
+            "cannot parse mesh file {}: a face's index is out of range",
+            path.display()
+        )
+    })?;
+    let (models, materials) =
+        parsed.map_err(|e| format!("cannot parse mesh file {}: {e}", path.display()))?;
     let mut warnings = Vec::new();
     let materials = materials.unwrap_or_else(|e| {
         warnings.push(format!(
@@ -117,6 +136,35 @@ pub fn load_obj(path: &Path, mtl_override: Option<MaterialOverride>) -> Result<O
         ));
     }
     Ok(ObjFile { groups, warnings })
+}
+
+/// MTL colour lines (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three values
+/// completed: `Kd 0.5` means `Kd 0.5 0.5 0.5` (the MTL format allows the
+/// short form), a missing value repeats the last one, and a line with no
+/// value is dropped. tobj panics on any of them (it unwraps a conversion
+/// of the values it found to three). Text that is not UTF-8 is left for
+/// tobj to refuse.
+fn complete_colours(bytes: Vec<u8>) -> Vec<u8> {
+    let text = match String::from_utf8(bytes) {
+        Ok(text) => text,
+        Err(e) => return e.into_bytes(),
+    };
+    let mut out = String::with_capacity(text.len() + 16);
+    for line in text.split_inclusive('\n') {
+        let mut words = line.split_whitespace();
+        let key = words.next().unwrap_or_default();
+        let mut values: Vec<&str> = words.take(3).collect();
+        match (key, values.last()) {
+            ("Ka" | "Kd" | "Ks" | "Ke", _) if values.len() == 3 => out.push_str(line),
+            ("Ka" | "Kd" | "Ks" | "Ke", Some(&last)) => {
+                values.resize(3, last);
+                out.push_str(&format!("{key} {}\n", values.join(" ")));
+            }
+            ("Ka" | "Kd" | "Ks" | "Ke", None) => {}
+            _ => out.push_str(line),
+        }
+    }
+    out.into_bytes()
 }
 
 fn convert_material(

@@ -1,13 +1,16 @@
 //! Helpers shared by the integration tests: a seedable generator, scene
 //! files, loading, block statistics for comparing estimators, the `tracer`
-//! binary ([`tracer()`]), the chi-square test ([`chi_square`]) and the locks
+//! binary ([`tracer()`]) and a watched child of it with a time limit
+//! ([`Watched`]), the chi-square test ([`chi_square`]) and the locks
 //! that keep timing tests apart from heavy ones ([`serial()`], [`heavy()`]).
 #![allow(dead_code)]
 
 pub mod chi_square;
+mod child;
 mod cli;
 mod serial;
 
+pub use child::{run_limited, Finished, Watched};
 pub use cli::{cache_dir, output_text, run, tracer};
 pub use serial::{heavy, serial};
 
