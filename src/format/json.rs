@@ -7,6 +7,7 @@
 //! type refuses the keys it does not know. Every error carries the key path.
 
 use super::desc::*;
+pub use super::json_objects::MAX_SUBDIVISIONS;
 use super::resolve;
 use super::sections::{self, CameraDesc, FilmDesc, RenderDesc};
 use crate::settings::{Invalid, Setting};
