@@ -104,9 +104,15 @@ impl Integrator {
     /// renderer then traces every pixel's paths even for a crop, and adds
     /// the splats to the image divided by the light paths traced.
     pub fn splats(&self) -> bool {
+        self.light_paths_per_sample() > 0
+    }
+
+    /// Light paths each pixel sample traces, over which the splats are
+    /// averaged: one for light tracing and BDPT, none for path tracing.
+    pub fn light_paths_per_sample(&self) -> u64 {
         match self {
-            Integrator::Pt(_) => false,
-            Integrator::Lt(_) | Integrator::Bdpt(_) => true,
+            Integrator::Pt(_) => 0,
+            Integrator::Lt(_) | Integrator::Bdpt(_) => 1,
         }
     }
 

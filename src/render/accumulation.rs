@@ -37,6 +37,8 @@ pub struct Accumulation {
     pub(super) splat_sums: [Vec<DVec3>; 2],
     /// Light paths traced per half: one per pixel sample taken.
     pub(super) light_paths: [u64; 2],
+    /// Light paths the integrator traces per pixel sample.
+    pub(super) paths_per_sample: u64,
     pub(super) full_pixels: u64,
     /// Each BDPT strategy's share, when kept.
     pub(super) strategies: Option<StrategySums>,
@@ -45,7 +47,12 @@ pub struct Accumulation {
 impl Accumulation {
     /// Nothing yet, for a render of `settings` by an integrator that
     /// splats or not; `keep_strategies` keeps each strategy's share apart.
-    pub(super) fn new(settings: &Settings, splatting: bool, keep_strategies: bool) -> Accumulation {
+    pub(super) fn new(
+        settings: &Settings,
+        paths_per_sample: u64,
+        keep_strategies: bool,
+    ) -> Accumulation {
+        let splatting = paths_per_sample > 0;
         let (width, height) = (settings.film.width, settings.film.height);
         let full_pixels = width as u64 * height as u64;
         Accumulation {
@@ -55,6 +62,7 @@ impl Accumulation {
             splatting,
             splat_sums: splat_buffers(full_pixels, splatting),
             light_paths: [0, 0],
+            paths_per_sample,
             full_pixels,
             strategies: keep_strategies.then(|| StrategySums::new(full_pixels as usize)),
         }
@@ -79,11 +87,12 @@ impl Accumulation {
             }
         }
         if self.splatting {
-            for (paths, n) in self
-                .light_paths
-                .iter_mut()
-                .zip(light_paths(tile, first, count))
-            {
+            for (paths, n) in self.light_paths.iter_mut().zip(light_paths(
+                tile,
+                first,
+                count,
+                self.paths_per_sample,
+            )) {
                 *paths += n;
             }
         }
@@ -180,8 +189,9 @@ impl Accumulation {
             }
         }
         if self.splatting {
-            // One light path per pixel sample: N paths estimate the image
-            // as (pixel count / N) times the splats' sum.
+            // Each splat is already divided by the pixel count (one pass of
+            // light paths); N paths in all estimate the image as
+            // (pixel count / N) times the splats' sum.
             let paths: u64 = halves.iter().map(|&h| self.light_paths[h]).sum();
             let scale = self.full_pixels as f64 / paths.max(1) as f64;
             for y in crop.y0..crop.y1 {

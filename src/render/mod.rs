@@ -186,7 +186,11 @@ fn run(
 ) -> Result<(Accumulation, RenderStats)> {
     let (integrator, camera) = prepare(settings)?;
     let pool = worker_pool(options.threads)?;
-    let mut acc = Accumulation::new(settings, integrator.splats(), keep_strategies);
+    let mut acc = Accumulation::new(
+        settings,
+        integrator.light_paths_per_sample(),
+        keep_strategies,
+    );
     let total = settings
         .stop
         .target_noise

@@ -110,8 +110,9 @@ impl Pass<'_> {
     }
 }
 
-/// Light paths added to each half by `tile` taking samples `first .. first + count`.
-pub(super) fn light_paths(tile: &Tile, first: u32, count: u32) -> [u64; 2] {
-    let n = tile.pixel_count() as u64;
+/// Light paths added to each half by `tile` taking samples
+/// `first .. first + count`, `per_sample` of them per pixel sample.
+pub(super) fn light_paths(tile: &Tile, first: u32, count: u32, per_sample: u64) -> [u64; 2] {
+    let n = tile.pixel_count() as u64 * per_sample;
     tiles::halves(first, count).map(|k| n * k as u64)
 }
