@@ -11,7 +11,6 @@ use tracer::Result;
 /// Prints what the scene holds and what a render of it would do.
 pub fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
     let desc = read_scene(path)?;
-    tracer::scene::estimate::check(&desc, None)?;
     let scene = build(&desc, cache.cache().as_ref())?;
     let count = |f: fn(&Light) -> bool| scene.lights.iter().filter(|l| f(l)).count();
     println!("scene:      {} ({})", scene.name, path.display());

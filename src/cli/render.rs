@@ -16,7 +16,7 @@ use tracer::render::{
     render_strategies, render_with, RenderOptions, RenderStats, StopReason, MAX_STRATEGY_LENGTH,
 };
 use tracer::scene::cache::{hex, scene_hash, CacheUse};
-use tracer::scene::{build, Scene};
+use tracer::scene::{build_limited, Scene};
 use tracer::settings::{Crop, Display, IntegratorKind, Setting, Settings};
 use tracer::{Error, Result};
 
@@ -157,9 +157,8 @@ pub fn prepare(args: &RenderArgs) -> Result<(Scene, Settings, String)> {
             "--bdpt-strategies renders the whole image from sample 0: it cannot be combined with --crop or --sample-offset".into(),
         ));
     }
-    tracer::scene::estimate::check(&desc, args.memory_limit)?;
     let hash = scene_hash(&desc);
-    let scene = build(&desc, args.cache.cache().as_ref())?;
+    let scene = build_limited(&desc, args.cache.cache().as_ref(), args.memory_limit)?;
     // Only a mesh that cannot be read leaves no hash, and then the build fails first.
     let hash = hash.map(|k| hex(&k)).ok_or_else(|| Error::Data {
         path: args.scene.clone(),

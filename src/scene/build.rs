@@ -4,6 +4,7 @@
 
 use super::builder::Builder;
 use super::cache::{self, Cache, CacheUse};
+use super::estimate;
 use super::{Scene, TriangleShading};
 use crate::bvh::{BuildOptions, WideBvh};
 use crate::color::Rgb;
@@ -71,8 +72,21 @@ pub struct MtlRecord {
     pub kd: Rgb,
 }
 
-/// Builds a described scene, through `cache` when given.
+/// Builds a described scene, through `cache` when given, refusing one that
+/// would need more memory than the machine has available.
 pub fn build(desc: &SceneDesc, cache: Option<&Cache>) -> Result<Scene> {
+    build_limited(desc, cache, None)
+}
+
+/// [`build`], refusing a scene estimated to need more than `memory_limit`
+/// bytes (default: what the machine has available). Meshes are scanned for
+/// the estimate only when the geometry is not in the cache: a hit knows its
+/// triangle count, and a warm load stays as fast as the cache makes it.
+pub fn build_limited(
+    desc: &SceneDesc,
+    cache: Option<&Cache>,
+    memory_limit: Option<u64>,
+) -> Result<Scene> {
     let mut b = Builder::new(&desc.file);
     for (name, m) in &desc.materials {
         let material = b.material(m, &format!("materials.{name}"), None)?;
@@ -87,7 +101,7 @@ pub fn build(desc: &SceneDesc, cache: Option<&Cache>) -> Result<Scene> {
             },
         ),
     };
-    let geometry = geometry(desc, cache, &mut b, default_material)?;
+    let geometry = geometry(desc, cache, &mut b, default_material, memory_limit)?;
     let mut report = std::mem::take(&mut b.report);
     report.degenerate_triangles_dropped = geometry.degenerate_triangles_dropped;
     let mut warnings = geometry.mesh_warnings.clone();
@@ -136,6 +150,7 @@ fn geometry(
     cache: Option<&Cache>,
     b: &mut Builder,
     default_material: u32,
+    memory_limit: Option<u64>,
 ) -> Result<Geometry> {
     let build_options = BuildOptions::default();
     let key = cache.and_then(|_| cache::scene_key(desc, &build_options));
@@ -145,6 +160,8 @@ fn geometry(
         _ => None,
     };
     if let Some(g) = cached {
+        let e = estimate::with_triangles(g.triangles.len() as u64, &desc.settings);
+        estimate::check_estimate(e, memory_limit)?;
         for record in &g.mtl_materials {
             let m = b.material(&record.desc, &record.context, Some(record.kd))?;
             b.add_material(record.name.clone(), m);
@@ -152,6 +169,8 @@ fn geometry(
         b.report.cache = CacheUse::Hit;
         return Ok(g);
     }
+    // Before anything is allocated for the objects.
+    estimate::check(desc, memory_limit)?;
     for object in &desc.objects {
         b.object(object, default_material)?;
     }

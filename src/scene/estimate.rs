@@ -41,15 +41,7 @@ pub fn estimate(desc: &SceneDesc, settings: &Settings) -> Estimate {
         .iter()
         .map(|o| shape_triangles(&o.shape))
         .fold(0u64, u64::saturating_add);
-    let pixels = settings.film.width as u64 * settings.film.height as u64;
-    let bytes = triangles
-        .saturating_mul(BYTES_PER_TRIANGLE)
-        .saturating_add(pixels.saturating_mul(BYTES_PER_PIXEL));
-    Estimate {
-        triangles,
-        pixels,
-        bytes,
-    }
+    with_triangles(triangles, settings)
 }
 
 fn shape_triangles(shape: &ShapeDesc) -> u64 {
@@ -102,7 +94,12 @@ pub fn available_memory() -> Option<u64> {
 /// Refuses a render of `desc` that would need more memory than `limit`
 /// (default: what the machine has available now).
 pub fn check(desc: &SceneDesc, limit: Option<u64>) -> Result<()> {
-    let e = estimate(desc, &desc.settings);
+    check_estimate(estimate(desc, &desc.settings), limit)
+}
+
+/// Refuses a render whose estimate exceeds `limit` (default: what the
+/// machine has available now).
+pub fn check_estimate(e: Estimate, limit: Option<u64>) -> Result<()> {
     let Some(available) = limit.or_else(available_memory) else {
         return Ok(());
     };
@@ -115,4 +112,17 @@ pub fn check(desc: &SceneDesc, limit: Option<u64>) -> Result<()> {
         });
     }
     Ok(())
+}
+
+/// The estimate for `triangles` already known (a scene cache hit) and the
+/// film of `settings`.
+pub fn with_triangles(triangles: u64, settings: &Settings) -> Estimate {
+    let pixels = settings.film.width as u64 * settings.film.height as u64;
+    Estimate {
+        triangles,
+        pixels,
+        bytes: triangles
+            .saturating_mul(BYTES_PER_TRIANGLE)
+            .saturating_add(pixels.saturating_mul(BYTES_PER_PIXEL)),
+    }
 }

@@ -9,7 +9,7 @@ mod builder;
 pub mod cache;
 pub mod estimate;
 
-pub use build::{build, load, Emitter, Geometry, MtlRecord};
+pub use build::{build, build_limited, load, Emitter, Geometry, MtlRecord};
 
 use crate::bvh::{Hit, WideBvh};
 use crate::geometry::SurfacePoint;
