@@ -24,7 +24,7 @@ pub use sink::{SampleSink, StrategySample};
 
 use crate::camera::Camera;
 use crate::color::Rgb;
-use crate::sampling::Sampler;
+use crate::sampling::{PixelSeed, Sampler};
 use crate::scene::Scene;
 use crate::settings::IntegratorKind;
 use walk::LightVertex;
@@ -53,6 +53,8 @@ pub enum Integrator {
 /// an image is the same whichever thread takes which tile.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PixelSample {
+    /// The camera and light paths' seeds for this pixel (see [`PixelSample::new`]).
+    seeds: [PixelSeed; 2],
     /// Column, in pixels from the left of the full image.
     pub x: u32,
     /// Row, in pixels from the top of the full image.
@@ -64,14 +66,35 @@ pub struct PixelSample {
 }
 
 impl PixelSample {
+    /// Sample `index` of pixel (`x`, `y`) of a render with `seed`. The
+    /// pixel's seeds are worked out here: make one per pixel and change
+    /// `index` for its samples.
+    pub fn new(x: u32, y: u32, index: u64, seed: u64) -> PixelSample {
+        PixelSample {
+            seeds: [
+                PixelSeed::new(seed, x, y),
+                PixelSeed::new(seed ^ LIGHT_SEED_DOMAIN, x, y),
+            ],
+            x,
+            y,
+            index,
+            seed,
+        }
+    }
+
+    /// The same pixel's sample `index`.
+    pub fn with_index(self, index: u64) -> PixelSample {
+        PixelSample { index, ..self }
+    }
+
     /// The random numbers of the camera path.
     pub fn camera_sampler(&self) -> Sampler {
-        Sampler::new(self.seed, self.x, self.y, self.index)
+        Sampler::for_pixel(self.seeds[0], self.index)
     }
 
     /// The random numbers of the light path, independent of the camera's.
     pub fn light_sampler(&self) -> Sampler {
-        Sampler::new(self.seed ^ LIGHT_SEED_DOMAIN, self.x, self.y, self.index)
+        Sampler::for_pixel(self.seeds[1], self.index)
     }
 }
 

@@ -78,14 +78,10 @@ impl Pass<'_> {
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
                 let mut sums = [DVec3::ZERO; 2];
+                let first = PixelSample::new(x, y, self.first as u64, self.seed);
                 for index in self.first..self.first + self.count {
                     let half = (index % 2) as usize;
-                    let pixel = PixelSample {
-                        x,
-                        y,
-                        index: index as u64,
-                        seed: self.seed,
-                    };
+                    let pixel = first.with_index(index as u64);
                     let l = self.integrator.sample(
                         self.scene,
                         self.camera,

@@ -6,4 +6,4 @@ pub mod sampler;
 pub mod warp;
 
 pub use distribution::Distribution1D;
-pub use sampler::Sampler;
+pub use sampler::{PixelSeed, Sampler};
