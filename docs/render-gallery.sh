@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Renders the bundled JSON scenes into docs/images/ for the README's gallery:
 # 256 x 256, seed 0, path tracing at 256 spp, the caustic scene with BDPT
-# at 512 spp (path tracing finds its caustics only by chance).
+# at 512 spp (path tracing finds its caustics only by chance), and the
+# rough-materials scene with BDPT at 256 spp (the light through its rough
+# glass is noisy for path tracing).
 #
 #   docs/render-gallery.sh
 set -euo pipefail
@@ -26,3 +28,4 @@ render cornell-box --spp 256
 render cornell-caustics --spp 512 --integrator bdpt
 render lights --spp 256
 render textured --spp 256
+render rough-materials --spp 256 --integrator bdpt

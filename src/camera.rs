@@ -1,8 +1,17 @@
-//! The pinhole camera.
+//! The perspective camera: a pinhole, or a thin lens.
 //!
 //! Pixel (0, 0) is the top-left of the image; the image's right is
 //! `forward × up` (right-handed, as Mitsuba 3's `look_at`). Each sample picks a
 //! uniformly random point inside its pixel: a box filter one pixel wide.
+//!
+//! A thin lens is a disk of radius `lens_radius` around `position`, facing
+//! `forward`; every ray through an image point passes through the same
+//! point of the plane in focus, `focus_distance` along the view axis. Seen
+//! from any one lens point the image maps to directions exactly as for the
+//! pinhole, so the importance and direction densities of the pinhole hold at
+//! every lens point, and the lens point itself (uniform on the disk) is
+//! sampled alike by camera paths and by light paths connecting to the
+//! camera: its density cancels from every MIS weight.
 
 use crate::geometry::Ray;
 use glam::Vec3;
@@ -10,8 +19,12 @@ use glam::Vec3;
 /// A pinhole camera looking at an image of `width` × `height` pixels.
 #[derive(Clone, Debug)]
 pub struct Camera {
-    /// The pinhole, in world space: every camera ray starts here.
+    /// The pinhole, or the lens's centre, in world space.
     pub position: Vec3,
+    /// Radius of the lens disk; 0 for a pinhole.
+    lens_radius: f32,
+    /// Distance along `forward` from the lens to the plane in focus.
+    focus_distance: f32,
     forward: Vec3,
     right: Vec3,
     up: Vec3,
@@ -36,6 +49,8 @@ impl Camera {
         let up = right.cross(forward);
         Some(Camera {
             position,
+            lens_radius: 0.0,
+            focus_distance: (look_at - position).length(),
             forward,
             right,
             up,
@@ -43,6 +58,28 @@ impl Camera {
             width,
             height,
         })
+    }
+
+    /// The same camera with a thin lens of `radius` (0: a pinhole) focused
+    /// `focus_distance` along the view axis (> 0).
+    pub fn with_lens(mut self, radius: f32, focus_distance: f32) -> Camera {
+        self.lens_radius = radius;
+        self.focus_distance = focus_distance;
+        self
+    }
+
+    /// Whether all rays start at `position` (no lens to sample).
+    pub fn is_pinhole(&self) -> bool {
+        self.lens_radius <= 0.0
+    }
+
+    /// A point on the lens, uniform on its disk, from two uniform numbers.
+    pub fn lens_point(&self, u: (f32, f32)) -> Vec3 {
+        if self.is_pinhole() {
+            return self.position;
+        }
+        let d = crate::sampling::warp::concentric_disk(u.0, u.1) * self.lens_radius;
+        self.position + d.x * self.right + d.y * self.up
     }
 
     /// Image width, in pixels.
@@ -78,6 +115,21 @@ impl Camera {
         d * d / cos
     }
 
+    /// The image point that a ray from the lens point `lens` through `p`
+    /// comes from: where the ray meets the plane in focus, projected through
+    /// the lens's centre. For a pinhole, [`Camera::project`].
+    pub fn project_from(&self, lens: Vec3, p: Vec3) -> Option<(f32, f32)> {
+        if self.is_pinhole() {
+            return self.project(p);
+        }
+        let d = p - lens;
+        let z = d.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        self.project(lens + d * (self.focus_distance / z))
+    }
+
     /// The image point (pixels, y downwards) that `p` projects to, if it is in
     /// front of the camera and inside the image.
     pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
@@ -94,15 +146,29 @@ impl Camera {
         inside.then_some((x, y))
     }
 
-    /// The ray through the image point (`x`, `y`) in pixel units, y downwards.
+    /// The ray through the image point (`x`, `y`) in pixel units, y
+    /// downwards, from the pinhole.
     pub fn ray(&self, x: f32, y: f32) -> Ray {
+        Ray::new(self.position, self.pinhole_direction(x, y))
+    }
+
+    /// The ray through the image point (`x`, `y`) from the lens point
+    /// `lens` (see [`Camera::lens_point`]): towards where the pinhole ray
+    /// meets the plane in focus.
+    pub fn ray_from(&self, lens: Vec3, x: f32, y: f32) -> Ray {
+        let dir = self.pinhole_direction(x, y);
+        if self.is_pinhole() {
+            return Ray::new(self.position, dir);
+        }
+        let focus = self.position + dir * (self.focus_distance / dir.dot(self.forward));
+        Ray::new(lens, (focus - lens).normalize())
+    }
+
+    fn pinhole_direction(&self, x: f32, y: f32) -> Vec3 {
         let aspect = self.width as f32 / self.height as f32;
         let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_half_fov * aspect;
         let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_half_fov;
-        Ray::new(
-            self.position,
-            (self.forward + sx * self.right + sy * self.up).normalize(),
-        )
+        (self.forward + sx * self.right + sy * self.up).normalize()
     }
 }
 
@@ -147,6 +213,32 @@ mod tests {
 
     /// The direction pdf integrates to the image's pixel count over the
     /// frustum: one unit of density per pixel.
+    #[test]
+    fn thin_lens_focuses_on_its_plane() {
+        let pinhole = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 50.0, 64, 48).unwrap();
+        let lens = pinhole.clone().with_lens(0.5, 4.0);
+        assert!(pinhole.is_pinhole() && !lens.is_pinhole());
+        let (x, y) = (20.25, 30.5);
+        let focus_point = {
+            let r = pinhole.ray(x, y);
+            r.origin + r.dir * (4.0 / r.dir.z)
+        };
+        for u in [(0.1, 0.2), (0.9, 0.5), (0.5, 0.5), (0.3, 0.95)] {
+            let p = lens.lens_point(u);
+            assert!(p.z.abs() < 1e-6 && p.length() <= 0.5 + 1e-6);
+            // Every lens ray through an image point meets the same point in focus...
+            let r = lens.ray_from(p, x, y);
+            let hit = r.origin + r.dir * ((4.0 - r.origin.z) / r.dir.z);
+            assert!(hit.abs_diff_eq(focus_point, 1e-4), "{hit} vs {focus_point}");
+            // ...and projecting back from that lens point finds the image point.
+            let (px, py) = lens.project_from(p, focus_point + r.dir * 3.0).unwrap();
+            assert!(
+                (px - x).abs() < 1e-3 && (py - y).abs() < 1e-3,
+                "({px}, {py})"
+            );
+        }
+    }
+
     #[test]
     fn direction_pdf_counts_pixels() {
         let c = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 60.0, 40, 30).unwrap();

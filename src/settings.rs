@@ -11,8 +11,8 @@ use std::path::PathBuf;
 /// The largest image accepted, in pixels (a 16k × 16k render).
 pub const MAX_PIXELS: u64 = 1 << 28;
 
-/// The pinhole camera as described: where it is, where it looks, and its
-/// vertical field of view in degrees.
+/// The camera as described: where it is, where it looks, its vertical
+/// field of view in degrees, and its lens (none for a pinhole).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraSettings {
     /// Pinhole position, in world space.
@@ -24,6 +24,11 @@ pub struct CameraSettings {
     pub up: Vec3,
     /// Vertical field of view, in degrees, in (0, 180).
     pub fov: f32,
+    /// Radius of the thin lens; 0 for a pinhole.
+    pub aperture_radius: f32,
+    /// Distance along the view axis to the plane in focus; `None` for the
+    /// distance from `position` to `look_at`.
+    pub focus_distance: Option<f32>,
 }
 
 /// The image: its size, where it is written and how it is tone mapped.
@@ -240,6 +245,25 @@ impl Settings {
                 format!("expected less than 180 degrees, found {fov}"),
             );
         }
+        let lens = (self.camera.aperture_radius, self.camera.focus_distance);
+        if !(lens.0 >= 0.0 && lens.0.is_finite()) {
+            return invalid(
+                Setting::Camera,
+                format!(
+                    "aperture_radius: expected a number zero or greater, found {}",
+                    lens.0
+                ),
+            );
+        }
+        if lens.1.is_some_and(|d| !(d > 0.0 && d.is_finite())) {
+            return invalid(
+                Setting::Camera,
+                format!(
+                    "focus_distance: expected a number greater than zero, found {:?}",
+                    lens.1
+                ),
+            );
+        }
         if self.camera().is_none() {
             return invalid(
                 Setting::Camera,
@@ -288,6 +312,9 @@ impl Settings {
     /// The camera at the film's resolution; `None` when it has no direction.
     pub fn camera(&self) -> Option<Camera> {
         let c = &self.camera;
+        let focus = c
+            .focus_distance
+            .unwrap_or_else(|| (c.look_at - c.position).length());
         Camera::new(
             c.position,
             c.look_at,
@@ -296,6 +323,7 @@ impl Settings {
             self.film.width,
             self.film.height,
         )
+        .map(|camera| camera.with_lens(c.aperture_radius, focus))
     }
 
     /// The pixels rendered: the crop, or the whole image.

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Convert a tracer scene (JSON, format version 1) into a Mitsuba 3 scene.
+"""Convert a tracer scene (JSON, format version 1 or 2) into a Mitsuba 3 scene.
 
 What both renderers support is converted; anything else is refused with a
 message naming the key (exception `Unsupported`, exit status 2 from the
@@ -14,6 +14,8 @@ Conversions (tracer -> Mitsuba 3):
   look_at(position, look_at, up)`. Both put `forward x up` on the image's
   right and pixel (0, 0) at the top left (checked by rendering: see
   compare.py's agreement check).
+- `aperture_radius` > 0 (format 2) -> `thinlens` with `aperture_radius` and
+  `focus_distance` (both measure the plane in focus along the view axis).
 - film -> `hdrfilm` (width x height, `pixel_format: rgb`) with a box filter
   one pixel wide (tracer's samples are uniform in their pixel).
 - `diffuse` (constant albedo) -> `twosided(diffuse)`: tracer's diffuse
@@ -26,6 +28,12 @@ Conversions (tracer -> Mitsuba 3):
   refraction in both). tracer tells inside from outside by the geometric
   normal, Mitsuba by the shading normal: they differ only on smooth-normal
   meshes, at grazing angles.
+- `conductor` (format 2) -> `twosided(roughconductor)` with `distribution:
+  ggx`, `alpha`, `eta`/`k` (or `material: none`, Fresnel 1, when both are
+  absent) and `specular_reflectance`; `alpha` 0 -> `twosided(conductor)`.
+- `rough_dielectric` (format 2) -> `roughdielectric` with `distribution:
+  ggx`, `alpha`, `int_ior`, `ext_ior` 1, `specular_transmittance`; `alpha`
+  0 -> `dielectric`.
 - objects `triangles`, `quad`, `cube`, `sphere` (tracer's icosphere, vertex
   for vertex) with their `transform` -> `mi.Mesh`; zero-area triangles are
   dropped as tracer drops them; vertex normals are carried by the inverse
@@ -43,7 +51,8 @@ Conversions (tracer -> Mitsuba 3):
 Refused: `mesh` (OBJ) objects, textures, `two_sided` emitters (Mitsuba 3's
 area light is one-sided), emitters with vertex normals (Mitsuba emits on the
 side of the interpolated normal, tracer of the geometric one), `spot` lights
-(different falloff curves), `.trs` files, format versions other than 1, and
+(different falloff curves), `.trs` files, format versions other than 1 and 2,
+`plastic`, `environment` lights, and
 any key this converter does not know.
 
 Usage as a module (a Mitsuba variant must be set first):
@@ -64,7 +73,7 @@ import sys
 
 import numpy as np
 
-FORMAT_VERSION = 1
+FORMAT_VERSIONS = (1, 2)
 
 
 class Unsupported(Exception):
@@ -224,6 +233,10 @@ def world_mesh(positions, normals, indices, m):
 
 # ------------------------------------------------------------ mitsuba parts
 
+# tracer treats narrower GGX lobes as smooth (src/material/microfacet.rs).
+SMOOTH_ALPHA = 1e-4
+
+
 def _rgb(c):
     return {"type": "rgb", "value": [float(x) for x in c]}
 
@@ -253,6 +266,36 @@ def bsdf_dict(mat, key):
         t = _color(mat.get("transmittance", [1, 1, 1]), f"{key}.transmittance")
         return {"type": "dielectric", "int_ior": ior, "ext_ior": 1.0,
                 "specular_transmittance": _rgb(t)}
+    if kind == "conductor":
+        _keys(mat, key, {"type", "alpha", "eta", "k", "reflectance"})
+        alpha = float(mat.get("alpha", 0.1))
+        r = _color(mat.get("reflectance", [1, 1, 1]), f"{key}.reflectance")
+        if ("eta" in mat) != ("k" in mat):
+            _fail(f"{key}.eta", "give both eta and k, or neither")
+        if "eta" in mat:
+            ior = {"eta": _rgb(_color(mat["eta"], f"{key}.eta")),
+                   "k": _rgb(_color(mat["k"], f"{key}.k"))}
+        else:
+            ior = {"material": "none"}
+        inner = {"specular_reflectance": _rgb(r), **ior}
+        if alpha <= SMOOTH_ALPHA:
+            inner["type"] = "conductor"
+        else:
+            inner.update({"type": "roughconductor", "distribution": "ggx", "alpha": alpha})
+        return {"type": "twosided", "bsdf": inner}
+    if kind == "rough_dielectric":
+        _keys(mat, key, {"type", "ior", "alpha", "transmittance"})
+        ior = float(mat.get("ior", 1.5))
+        if not ior > 0:
+            _fail(f"{key}.ior", "expected > 0")
+        alpha = float(mat.get("alpha", 0.1))
+        t = _color(mat.get("transmittance", [1, 1, 1]), f"{key}.transmittance")
+        out = {"int_ior": ior, "ext_ior": 1.0, "specular_transmittance": _rgb(t)}
+        if alpha <= SMOOTH_ALPHA:
+            out["type"] = "dielectric"
+        else:
+            out.update({"type": "roughdielectric", "distribution": "ggx", "alpha": alpha})
+        return out
     _fail(f"{key}.type", f"material type {kind!r} is not converted")
 
 
@@ -439,12 +482,13 @@ def convert(scene, *, integrator="path", sampler="independent", spp=None,
     scene = load(scene)
     _keys(scene, "", {"format", "name", "camera", "film", "render", "materials",
                       "objects", "lights"})
-    if scene.get("format", 1) != FORMAT_VERSION:
-        _fail("format", f"format version {scene['format']} is not converted (only 1)")
+    if scene.get("format", 1) not in FORMAT_VERSIONS:
+        _fail("format", f"format version {scene['format']} is not converted (only 1 and 2)")
     s = settings(scene)
 
     cam = scene["camera"]
-    _keys(cam, "camera", {"type", "position", "look_at", "up", "fov"})
+    _keys(cam, "camera", {"type", "position", "look_at", "up", "fov", "aperture_radius",
+                          "focus_distance"})
     if cam.get("type", "perspective") != "perspective":
         _fail("camera.type", "only perspective cameras")
     film = scene.get("film", {})
@@ -460,6 +504,16 @@ def convert(scene, *, integrator="path", sampler="independent", spp=None,
     spp = s["spp"] if spp is None else int(spp)
     if sampler not in SAMPLERS:
         _fail("sampler", f"unknown Mitsuba sampler {sampler!r}")
+    position = _vec3(cam["position"], "camera.position")
+    target = _vec3(cam["look_at"], "camera.look_at")
+    aperture = float(cam.get("aperture_radius", 0.0))
+    lens = {}
+    if aperture > 0:
+        focus = cam.get("focus_distance")
+        if focus is None:
+            focus = math.dist(position, target)
+        lens = {"type": "thinlens", "aperture_radius": aperture,
+                "focus_distance": float(focus)}
     out = {
         "type": "scene",
         "sensor": {
@@ -476,6 +530,7 @@ def convert(scene, *, integrator="path", sampler="independent", spp=None,
                 "pixel_format": "rgb",
                 "rfilter": {"type": "box"},
             },
+            **lens,
             "sampler": {
                 "type": sampler,
                 "sample_count": valid_spp(sampler, spp),

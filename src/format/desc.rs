@@ -110,6 +110,23 @@ impl<'de> Deserialize<'de> for Positive {
     }
 }
 
+/// A number zero or greater.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NonNegative(pub f32);
+
+impl<'de> Deserialize<'de> for NonNegative {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let Finite(x) = Finite::deserialize(d)?;
+        if x < 0.0 {
+            return Err(D::Error::custom(format!(
+                "expected a number zero or greater, found {}",
+                short(x)
+            )));
+        }
+        Ok(NonNegative(x))
+    }
+}
+
 /// An integer greater than zero.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Count(pub u32);
@@ -209,6 +226,24 @@ pub enum MaterialDesc {
     Dielectric {
         /// Index of refraction inside relative to outside; > 0 (JSON default: 1.5).
         ior: f32,
+        /// Per-channel factor on refracted light, in [0, 1] (JSON default: 1).
+        transmittance: Rgb,
+    },
+    /// A GGX conductor (format 2).
+    Conductor {
+        /// GGX width, ≥ 0 (JSON default: 0.1).
+        alpha: f32,
+        /// Complex index of refraction (`eta`, `k`); `None` for Fresnel 1.
+        ior: Option<(Rgb, Rgb)>,
+        /// Multiplier on reflected light, in [0, 1] (JSON default: 1).
+        reflectance: Rgb,
+    },
+    /// GGX rough glass (format 2).
+    RoughDielectric {
+        /// Index of refraction inside relative to outside; > 0 (JSON default: 1.5).
+        ior: f32,
+        /// GGX width, ≥ 0 (JSON default: 0.1).
+        alpha: f32,
         /// Per-channel factor on refracted light, in [0, 1] (JSON default: 1).
         transmittance: Rgb,
     },

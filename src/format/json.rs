@@ -52,12 +52,12 @@ pub fn parse(text: &str, file: &Path) -> Result<SceneDesc> {
         column: e.column(),
         message: strip_position(&e.to_string()),
     })?;
-    if scene.format != 1 {
+    if !(1..=2).contains(&scene.format) {
         return Err(Error::scene(
             file,
             "format",
             format!(
-                "unsupported format version {}; this renderer reads version 1",
+                "unsupported format version {}; this renderer reads versions 1 and 2",
                 scene.format
             ),
         ));

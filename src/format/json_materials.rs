@@ -31,7 +31,39 @@ impl Ctx<'_> {
             #[serde(default)]
             transmittance: Option<Reflectance>,
         }
-        let (kind, map) = self.tagged(value, path, &["diffuse", "mirror", "dielectric"])?;
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Conductor {
+            #[serde(default)]
+            alpha: Option<NonNegative>,
+            #[serde(default)]
+            eta: Option<Color>,
+            #[serde(default)]
+            k: Option<Color>,
+            #[serde(default)]
+            reflectance: Option<Reflectance>,
+        }
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct RoughDielectric {
+            #[serde(default)]
+            ior: Option<Positive>,
+            #[serde(default)]
+            alpha: Option<NonNegative>,
+            #[serde(default)]
+            transmittance: Option<Reflectance>,
+        }
+        let (kind, map) = self.tagged(
+            value,
+            path,
+            &[
+                "diffuse",
+                "mirror",
+                "dielectric",
+                "conductor",
+                "rough_dielectric",
+            ],
+        )?;
         let map = Value::Object(map);
         Ok(match kind.as_str() {
             "diffuse" => {
@@ -48,10 +80,42 @@ impl Ctx<'_> {
                     reflectance: m.reflectance.map_or(Vec3::ONE, |r| r.0),
                 }
             }
-            _ => {
+            "dielectric" => {
                 let d: Dielectric = self.typed(map, path)?;
                 MaterialDesc::Dielectric {
                     ior: d.ior.map_or(1.5, |x| x.0),
+                    transmittance: d.transmittance.map_or(Vec3::ONE, |r| r.0),
+                }
+            }
+            "conductor" => {
+                let c: Conductor = self.typed(map, path)?;
+                let ior = match (c.eta, c.k) {
+                    (Some(eta), Some(k)) => Some((eta.0, k.0)),
+                    (None, None) => None,
+                    (Some(_), None) => {
+                        return Err(self.err(
+                            &format!("{path}.k"),
+                            "missing: give both `eta` and `k` (or neither, for Fresnel 1)",
+                        ))
+                    }
+                    (None, Some(_)) => {
+                        return Err(self.err(
+                            &format!("{path}.eta"),
+                            "missing: give both `eta` and `k` (or neither, for Fresnel 1)",
+                        ))
+                    }
+                };
+                MaterialDesc::Conductor {
+                    alpha: c.alpha.map_or(0.1, |a| a.0),
+                    ior,
+                    reflectance: c.reflectance.map_or(Vec3::ONE, |r| r.0),
+                }
+            }
+            _ => {
+                let d: RoughDielectric = self.typed(map, path)?;
+                MaterialDesc::RoughDielectric {
+                    ior: d.ior.map_or(1.5, |x| x.0),
+                    alpha: d.alpha.map_or(0.1, |a| a.0),
                     transmittance: d.transmittance.map_or(Vec3::ONE, |r| r.0),
                 }
             }

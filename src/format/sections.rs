@@ -1,7 +1,7 @@
 //! The plain sections of a JSON scene file (`camera`, `film`, `render`) as
 //! serde reads them, with their defaults, and how they become [`Settings`].
 
-use super::desc::{Count, Finite, Positive, Seconds, V3};
+use super::desc::{Count, Finite, NonNegative, Positive, Seconds, V3};
 use crate::settings::{CameraSettings, IntegratorKind, Settings, Tonemap};
 use glam::Vec3;
 use std::path::PathBuf;
@@ -30,6 +30,10 @@ pub struct CameraDesc {
     pub up: V3,
     #[serde(default = "default_fov")]
     pub fov: Positive,
+    #[serde(default)]
+    pub aperture_radius: Option<NonNegative>,
+    #[serde(default)]
+    pub focus_distance: Option<Positive>,
 }
 
 fn default_camera_type() -> CameraType {
@@ -128,6 +132,8 @@ pub fn settings(
             look_at: camera.look_at.0,
             up: camera.up.0,
             fov: camera.fov.0,
+            aperture_radius: camera.aperture_radius.map_or(0.0, |r| r.0),
+            focus_distance: camera.focus_distance.map(|d| d.0),
         },
         output,
     );

@@ -112,6 +112,8 @@ impl Reader<'_> {
                     look_at: position + Vec3::Z,
                     up: Vec3::Y,
                     fov: member.number("fov")?,
+                    aperture_radius: 0.0,
+                    focus_distance: None,
                 };
                 self.camera = Some((camera, path.clone()));
                 Ok(())

@@ -16,7 +16,7 @@
 //! light point seen directly (s = 1, t = 1) is left to s = 0.
 
 use super::connect::{visible, Endpoint};
-use super::light_path::{camera_splat, follow_light_walk};
+use super::light_path::{camera_splat, follow_light_walk, sample_lens};
 use super::mis::mis;
 use super::sink::SampleSink;
 use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, Walk};
@@ -61,7 +61,11 @@ impl Bidirectional {
         self.trace_light_path(scene, camera, &mut light_sampler, light_vertices, sink);
         let (x, y) = (pixel.x as f32 + jx, pixel.y as f32 + jy);
         let index = y as u32 * camera.width() + x as u32;
-        let ray = camera.ray(x, y);
+        let ray = if camera.is_pinhole() {
+            camera.ray(x, y)
+        } else {
+            camera.ray_from(camera.lens_point(camera_sampler.next_2d()), x, y)
+        };
         let camera_pdf = camera.direction_pdf(ray.dir);
         if camera_pdf <= 0.0 {
             return Rgb::ZERO;
@@ -101,9 +105,10 @@ impl Bidirectional {
             return;
         };
         let paths = light_paths_per_pass(camera);
+        let lens = sample_lens(camera, sampler);
         follow_light_walk(scene, sampler, start.walk, self.max_depth, |v| {
             keep.push(*v);
-            if let Some((c, value)) = camera_splat(scene, camera, v, paths) {
+            if let Some((c, value)) = camera_splat(scene, camera, lens, v, paths) {
                 let (_, reverse_pdf) = v.bsdf.pdfs(v.wo, c.dir_to_camera);
                 let cos_surface = c.dir_to_camera.dot(v.surface.geometric_normal).abs();
                 let w_light = mis(c.camera_pdf_area(cos_surface) / paths)

@@ -94,6 +94,8 @@ pub fn unoccluded(scene: &Scene, surface: &SurfacePoint, sample: &IncidentSample
 /// camera's area density (for MIS, in per-pixel units over the path count).
 pub struct CameraConnection {
     pub pixel: u32,
+    /// The point on the lens (the pinhole itself for a pinhole camera).
+    pub lens: Vec3,
     pub dir_to_camera: Vec3,
     pub distance: f32,
     /// (distance to the image point)² / cos at the camera: solid angle to image area.
@@ -101,9 +103,12 @@ pub struct CameraConnection {
 }
 
 impl CameraConnection {
-    pub fn new(camera: &Camera, position: Vec3) -> Option<CameraConnection> {
-        let (x, y) = camera.project(position)?;
-        let to_camera = camera.position - position;
+    /// The connection of `position` to the lens point `lens` (see
+    /// [`Camera::lens_point`]); `None` when it lands outside the image.
+    #[inline]
+    pub fn new(camera: &Camera, lens: Vec3, position: Vec3) -> Option<CameraConnection> {
+        let (x, y) = camera.project_from(lens, position)?;
+        let to_camera = lens - position;
         let distance = to_camera.length();
         let dir_to_camera = to_camera / distance;
         let cos_camera = (-dir_to_camera).dot(camera.forward());
@@ -113,6 +118,7 @@ impl CameraConnection {
         let image_distance = camera.image_plane_distance() / cos_camera;
         Some(CameraConnection {
             pixel: y as u32 * camera.width() + x as u32,
+            lens,
             dir_to_camera,
             distance,
             image_to_solid_angle: image_distance * image_distance / cos_camera,

@@ -10,6 +10,7 @@ use crate::geometry::Ray;
 use crate::material::Transport;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use glam::Vec3;
 
 /// Continues `walk` from a light, calling `visit` at every vertex that is
 /// not a delta (the vertices a connection can reach), until the path would
@@ -60,16 +61,28 @@ pub fn follow_light_walk(
     }
 }
 
+/// The lens point a light path's camera connections go to: one per path,
+/// drawn after the path's start (a pinhole draws nothing, so pinhole
+/// images do not depend on it).
+pub(super) fn sample_lens(camera: &Camera, sampler: &mut Sampler) -> Vec3 {
+    if camera.is_pinhole() {
+        camera.position
+    } else {
+        camera.lens_point(sampler.next_2d())
+    }
+}
+
 /// A light vertex seen by the camera: where it lands, and its splat before
 /// any MIS weight (`None` when it is outside the image, behind the camera,
 /// occluded, or reflects nothing towards the camera).
 pub fn camera_splat(
     scene: &Scene,
     camera: &Camera,
+    lens: Vec3,
     v: &LightVertex,
     light_paths: f32,
 ) -> Option<(CameraConnection, Rgb)> {
-    let c = CameraConnection::new(camera, v.surface.position)?;
+    let c = CameraConnection::new(camera, lens, v.surface.position)?;
     let f = v
         .bsdf
         .eval_mode(v.wo, c.dir_to_camera, Transport::Importance);
@@ -77,7 +90,7 @@ pub fn camera_splat(
         || !visible(
             scene,
             Endpoint::surface(&v.surface),
-            Endpoint::point(camera.position),
+            Endpoint::point(c.lens),
         )
     {
         return None;

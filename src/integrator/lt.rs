@@ -6,7 +6,7 @@
 //! directly by the pinhole camera, in any integrator.
 
 use super::connect::{visible, CameraConnection, Endpoint};
-use super::light_path::{camera_splat, follow_light_walk};
+use super::light_path::{camera_splat, follow_light_walk, sample_lens};
 use super::sink::SampleSink;
 use super::walk::{light_paths_per_pass, start_light_walk, LightStart};
 use crate::camera::Camera;
@@ -14,6 +14,7 @@ use crate::color::is_black;
 use crate::light::Light;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use glam::Vec3;
 
 /// The light tracer and its settings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,9 +37,10 @@ impl LightTracer {
             return;
         };
         let paths = light_paths_per_pass(camera);
-        splat_light_point(scene, camera, &start, paths, sink);
+        let lens = sample_lens(camera, sampler);
+        splat_light_point(scene, camera, lens, &start, paths, sink);
         follow_light_walk(scene, sampler, start.walk, self.max_depth, |v| {
-            if let Some((c, value)) = camera_splat(scene, camera, v, paths) {
+            if let Some((c, value)) = camera_splat(scene, camera, lens, v, paths) {
                 sink.emit(c.pixel, value);
                 sink.record(v.length + 1, 1, c.pixel, value, 1.0);
             }
@@ -50,6 +52,7 @@ impl LightTracer {
 fn splat_light_point(
     scene: &Scene,
     camera: &Camera,
+    lens: Vec3,
     start: &LightStart,
     paths: f32,
     sink: &mut SampleSink,
@@ -58,7 +61,7 @@ fn splat_light_point(
         return;
     };
     let emission = &start.emission;
-    let Some(c) = CameraConnection::new(camera, emission.origin) else {
+    let Some(c) = CameraConnection::new(camera, lens, emission.origin) else {
         return;
     };
     let le = light.emitted(c.dir_to_camera);
@@ -68,7 +71,7 @@ fn splat_light_point(
         normal: light.normal,
         magnitude: light.magnitude,
     };
-    if !is_black(le) && visible(scene, light_point, Endpoint::point(camera.position)) {
+    if !is_black(le) && visible(scene, light_point, Endpoint::point(lens)) {
         let value = le * cos / (start.pick * emission.direct_pdf_area);
         sink.emit(c.pixel, c.splat(value, paths));
     }

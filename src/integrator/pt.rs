@@ -36,7 +36,12 @@ impl PathTracer {
     pub fn sample(&self, scene: &Scene, camera: &Camera, pixel: PixelSample) -> Rgb {
         let mut sampler = pixel.camera_sampler();
         let (jx, jy) = sampler.next_2d();
-        let ray = camera.ray(pixel.x as f32 + jx, pixel.y as f32 + jy);
+        let (x, y) = (pixel.x as f32 + jx, pixel.y as f32 + jy);
+        let ray = if camera.is_pinhole() {
+            camera.ray(x, y)
+        } else {
+            camera.ray_from(camera.lens_point(sampler.next_2d()), x, y)
+        };
         radiance(scene, ray, &mut sampler, self.max_depth)
     }
 }

@@ -5,12 +5,17 @@
 //! [`Bsdf`] the integrators sample and evaluate. Both are enums, so the hot
 //! loops dispatch with a `match`, not a virtual call.
 
+mod conductor;
 mod dielectric;
 mod diffuse;
+pub mod microfacet;
 mod mirror;
+mod rough_dielectric;
 pub mod texture;
 
+pub use conductor::{fresnel_conductor, Conductor};
 pub use dielectric::fresnel_dielectric;
+pub use rough_dielectric::RoughDielectric;
 pub use texture::Texture;
 
 use crate::color::Rgb;
@@ -50,6 +55,29 @@ pub enum Material {
         /// reflection is untinted.
         transmittance: Rgb,
     },
+    /// A metal: GGX microfacet reflection with a complex Fresnel term,
+    /// from both faces (Mitsuba 3's `roughconductor`).
+    Conductor {
+        /// GGX width (not squared); 0 is a smooth mirror.
+        alpha: f32,
+        /// Real part of the complex index of refraction, per channel
+        /// (0, with `k` 1, for Fresnel 1).
+        eta: Rgb,
+        /// Extinction coefficient, per channel.
+        k: Rgb,
+        /// Multiplier on reflected light, per channel.
+        reflectance: Rgb,
+    },
+    /// Rough glass: GGX microfacet reflection and refraction (Mitsuba 3's
+    /// `roughdielectric`); inside and outside as for [`Material::Dielectric`].
+    RoughDielectric {
+        /// Index of refraction inside relative to outside; > 0.
+        ior: f32,
+        /// GGX width (not squared); 0 is smooth glass.
+        alpha: f32,
+        /// Per-channel factor on light each time it refracts.
+        transmittance: Rgb,
+    },
 }
 
 /// Which quantity a path carries. Radiance (camera paths) and importance (light
@@ -83,6 +111,10 @@ pub enum BsdfKind {
         /// Per-channel factor on refracted light, in [0, 1].
         transmittance: Rgb,
     },
+    /// GGX reflection with a complex Fresnel term.
+    Conductor(Conductor),
+    /// GGX reflection and refraction.
+    RoughDielectric(RoughDielectric),
 }
 
 /// A BSDF at one surface point, oriented to the side its outgoing direction is on.
@@ -142,6 +174,26 @@ impl Material {
                 eta: if outside { *ior } else { 1.0 / *ior },
                 transmittance: *transmittance,
             },
+            Material::Conductor {
+                alpha,
+                eta,
+                k,
+                reflectance,
+            } => BsdfKind::Conductor(Conductor {
+                alpha: *alpha,
+                eta: *eta,
+                k: *k,
+                reflectance: *reflectance,
+            }),
+            Material::RoughDielectric {
+                ior,
+                alpha,
+                transmittance,
+            } => BsdfKind::RoughDielectric(RoughDielectric {
+                alpha: *alpha,
+                eta: if outside { *ior } else { 1.0 / *ior },
+                transmittance: *transmittance,
+            }),
         };
         Bsdf {
             kind,
@@ -153,14 +205,25 @@ impl Material {
     /// Whether the material scatters only into delta lobes (mirror or glass),
     /// so light sampling cannot connect to it.
     pub fn is_delta(&self) -> bool {
-        !matches!(self, Material::Diffuse { .. })
+        match self {
+            Material::Diffuse { .. } => false,
+            Material::Mirror { .. } | Material::Dielectric { .. } => true,
+            Material::Conductor { alpha, .. } | Material::RoughDielectric { alpha, .. } => {
+                *alpha <= microfacet::SMOOTH_ALPHA
+            }
+        }
     }
 }
 
 impl Bsdf {
     /// Whether the BSDF has only delta lobes, so `eval` and `pdf` are always zero.
     pub fn is_delta(&self) -> bool {
-        !matches!(self.kind, BsdfKind::Diffuse { .. })
+        match self.kind {
+            BsdfKind::Diffuse { .. } => false,
+            BsdfKind::Mirror { .. } | BsdfKind::Dielectric { .. } => true,
+            BsdfKind::Conductor(c) => c.is_smooth(),
+            BsdfKind::RoughDielectric(r) => r.is_smooth(),
+        }
     }
 
     /// Unit shading normal, flipped to the side of `wo`.
@@ -168,20 +231,55 @@ impl Bsdf {
         self.frame.n
     }
 
-    /// `f(wo, wi) · |cos θi|` with θi measured from the shading normal; zero for
-    /// delta lobes and for directions on the wrong geometric side.
+    /// `f(wo, wi) · |cos θi|` for radiance, with θi measured from the
+    /// shading normal; zero for delta lobes, and where the shading and
+    /// geometric normals disagree on which side `wi` is.
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
-        match self.kind {
-            BsdfKind::Diffuse { albedo } => {
-                if wi.dot(self.ng) <= 0.0 {
-                    return Rgb::ZERO;
-                }
-                diffuse::eval(albedo, self.frame.to_local(wi))
+        self.eval_local(wo, wi, Transport::Radiance)
+    }
+
+    /// Whether `wi` is reflected (on `wo`'s geometric side); `None` when
+    /// the shading normal puts it on the other side than the geometry does.
+    #[inline]
+    fn side(&self, wi: Vec3) -> Option<bool> {
+        let reflected = wi.dot(self.ng) > 0.0;
+        ((wi.dot(self.frame.n) > 0.0) == reflected).then_some(reflected)
+    }
+
+    fn eval_local(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
+        let Some(reflected) = self.side(wi) else {
+            return Rgb::ZERO;
+        };
+        match &self.kind {
+            BsdfKind::Diffuse { albedo } if reflected => {
+                diffuse::eval(*albedo, self.frame.to_local(wi))
             }
-            _ => {
-                let _ = wo;
-                Rgb::ZERO
+            BsdfKind::Conductor(_) | BsdfKind::RoughDielectric(_) => {
+                self.eval_microfacet(wo, wi, reflected, mode)
             }
+            _ => Rgb::ZERO,
+        }
+    }
+
+    // The microfacet lobes stay out of line, so the diffuse path above
+    // inlines into the integrators' loops.
+    #[inline(never)]
+    fn eval_microfacet(&self, wo: Vec3, wi: Vec3, reflected: bool, mode: Transport) -> Rgb {
+        let (wo, wi_local) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        match &self.kind {
+            BsdfKind::Conductor(c) if reflected => c.eval(wo, wi_local),
+            BsdfKind::RoughDielectric(r) => r.eval(wo, wi_local, mode),
+            _ => Rgb::ZERO,
+        }
+    }
+
+    #[inline(never)]
+    fn microfacet_pdfs(&self, wo: Vec3, wi: Vec3, reflected: bool) -> (f32, f32) {
+        let (wo, wi_local) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        match &self.kind {
+            BsdfKind::Conductor(c) if reflected => (c.pdf(wo, wi_local), c.pdf(wi_local, wo)),
+            BsdfKind::RoughDielectric(r) => (r.pdf(wo, wi_local), r.reverse_pdf(wo, wi_local)),
+            _ => (0.0, 0.0),
         }
     }
 
@@ -192,13 +290,34 @@ impl Bsdf {
 
     /// Densities of sampling `wi` given `wo`, and of `wo` given `wi` (the
     /// reverse direction that BDPT's MIS weights need); zero for delta lobes.
+    #[inline]
     pub fn pdfs(&self, wo: Vec3, wi: Vec3) -> (f32, f32) {
-        match self.kind {
-            BsdfKind::Diffuse { .. } if wi.dot(self.ng) > 0.0 => (
+        let Some(reflected) = self.side(wi) else {
+            return (0.0, 0.0);
+        };
+        match &self.kind {
+            BsdfKind::Diffuse { .. } if reflected => (
                 diffuse::pdf(self.frame.to_local(wi)),
                 diffuse::pdf(self.frame.to_local(wo)),
             ),
+            BsdfKind::Conductor(_) | BsdfKind::RoughDielectric(_) => {
+                self.microfacet_pdfs(wo, wi, reflected)
+            }
             _ => (0.0, 0.0),
+        }
+    }
+
+    /// The second density of [`Bsdf::pdfs`] alone: of sampling `wo` given `wi`.
+    pub fn reverse_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let Some(reflected) = self.side(wi) else {
+            return 0.0;
+        };
+        match &self.kind {
+            BsdfKind::Diffuse { .. } if reflected => diffuse::pdf(self.frame.to_local(wo)),
+            BsdfKind::Conductor(_) | BsdfKind::RoughDielectric(_) => {
+                self.microfacet_pdfs(wo, wi, reflected).1
+            }
+            _ => 0.0,
         }
     }
 
@@ -206,9 +325,9 @@ impl Bsdf {
     /// from `wo` to `wi` (importance, on light paths). For importance the
     /// cosine factor carries the correction that keeps shading normals
     /// consistent in the adjoint direction: f · |wo·ns| |wi·ng| / |wo·ng|
-    /// (Veach's thesis, eq. 5.19).
+    /// (Veach's thesis, eq. 5.19), and refraction is not scaled by 1/eta².
     pub fn eval_mode(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
-        let value = self.eval(wo, wi);
+        let value = self.eval_local(wo, wi, mode);
         match mode {
             Transport::Radiance => value,
             Transport::Importance => value * self.shading_correction(wo, wi),
@@ -241,6 +360,8 @@ impl Bsdf {
             BsdfKind::Dielectric { eta, transmittance } => {
                 dielectric::sample(eta, transmittance, wo_local, u_lobe, mode)?
             }
+            BsdfKind::Conductor(ref c) => c.sample(wo_local, u)?,
+            BsdfKind::RoughDielectric(ref r) => r.sample(wo_local, u, u_lobe, mode)?,
         };
         let wi = self.frame.to_world(wi_local);
         // Shading normals can send a "reflected" direction through the surface

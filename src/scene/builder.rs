@@ -117,6 +117,29 @@ impl<'a> Builder<'a> {
                 ior: *ior,
                 transmittance: *transmittance,
             },
+            MaterialDesc::Conductor {
+                alpha,
+                ior,
+                reflectance,
+            } => {
+                // Fresnel 1 is the complex index 0 + 1i, as in Mitsuba 3.
+                let (eta, k) = ior.unwrap_or((Rgb::ZERO, Rgb::ONE));
+                Material::Conductor {
+                    alpha: *alpha,
+                    eta,
+                    k,
+                    reflectance: *reflectance,
+                }
+            }
+            MaterialDesc::RoughDielectric {
+                ior,
+                alpha,
+                transmittance,
+            } => Material::RoughDielectric {
+                ior: *ior,
+                alpha: *alpha,
+                transmittance: *transmittance,
+            },
         })
     }
 

@@ -127,3 +127,46 @@ fn point_and_area_lights_together() {
     let path = write_scene(dir.path(), "room.json", &json);
     all_three_agree(&path, 32, [16, 16, 8]);
 }
+
+/// Rough metal, rough glass (seen from outside and, through it, from
+/// inside) and a Fresnel-1 conductor: each integrator samples and evaluates
+/// them differently (BSDF sampling, light connections, adjoint scattering
+/// on light paths), so agreement checks all of that at once.
+#[test]
+fn rough_conductor_rough_glass_and_thin_lens() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = format!(r#"{{{ROOM} "lights": [{{"type": "point", "position": [-1, 2, -1], "intensity": [6, 6, 6]}}]}}"#)
+        .replace(
+            r#""red": {"type": "diffuse", "albedo": [0.8, 0.2, 0.1]}"#,
+            r#""red": {"type": "diffuse", "albedo": [0.8, 0.2, 0.1]},
+               "gold": {"type": "conductor", "alpha": 0.3, "eta": [0.18, 0.42, 1.37], "k": [3.42, 2.35, 1.77]},
+               "steel": {"type": "conductor", "alpha": 0.15, "reflectance": [0.7, 0.7, 0.75]},
+               "frosted": {"type": "rough_dielectric", "ior": 1.5, "alpha": 0.25}"#,
+        )
+        .replace(
+            r#""translate": [0.7, 0.6, 0.6]}}"#,
+            r#""translate": [0.7, 0.6, 0.6]}, "material": "gold"}"#,
+        )
+        .replace(r#""subdivisions": 1, "material": "white""#, r#""subdivisions": 1, "material": "frosted""#)
+        .replacen(
+            r#""objects": ["#,
+            r#""objects": [{"type": "quad", "material": "white", "emission": [6, 5, 4],
+                            "transform": {"scale": 0.8, "rotate": [1, 0, 0, 180], "translate": [0, 2.9, 0.5]}},
+                           {"type": "sphere", "center": [0.1, 0.25, -0.7], "radius": 0.25, "subdivisions": 2, "material": "steel"},"#,
+            1,
+        )
+        .replace(r#"{"type": "cube", "material": "white","#, r#"{"type": "cube","#);
+    assert!(json.contains("\"gold\"}") && json.contains("frosted\"}") && json.contains("steel\"}"));
+    let path = write_scene(dir.path(), "room.json", &json);
+    all_three_agree(&path, 32, [16, 16, 8]);
+    // The same room through a wide thin lens focused in front of everything
+    // (blurs of several pixels, so a misplaced lens shows in 8 × 8 blocks): light
+    // paths connect to points on the lens, camera paths start on it.
+    let lens = json.replace(
+        r#""fov": 55}"#,
+        r#""fov": 55, "aperture_radius": 0.4, "focus_distance": 1.8}"#,
+    );
+    assert_ne!(lens, json);
+    let path = write_scene(dir.path(), "lens.json", &lens);
+    all_three_agree(&path, 32, [16, 16, 8]);
+}

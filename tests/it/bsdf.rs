@@ -37,13 +37,13 @@ fn check_sampling_matches_pdf(what: &str, bsdf: &Bsdf, wo: Vec3, seed: u64) {
             // The sample's pdf and weight agree with pdf() and eval().
             let pdf = bsdf.pdf(wo, s.wi);
             assert!(
-                (pdf - s.pdf).abs() <= 1e-4 * s.pdf,
+                (pdf - s.pdf).abs() <= 1e-3 * s.pdf,
                 "pdf {pdf} vs sampled {}",
                 s.pdf
             );
             let expected_weight = bsdf.eval(wo, s.wi) / s.pdf;
             assert!(
-                expected_weight.abs_diff_eq(s.weight, 1e-4),
+                expected_weight.abs_diff_eq(s.weight, 1e-3 * s.weight.max_element().max(0.1)),
                 "{expected_weight} vs {}",
                 s.weight
             );
@@ -170,4 +170,204 @@ fn dielectric_chooses_lobes_by_fresnel() {
             "reflected {p}, Fresnel {f}"
         );
     }
+}
+
+fn conductor(alpha: f32) -> Material {
+    // Roughly gold: a complex index per channel.
+    Material::Conductor {
+        alpha,
+        eta: Rgb::new(0.18, 0.42, 1.37),
+        k: Rgb::new(3.42, 2.35, 1.77),
+        reflectance: Rgb::new(1.0, 0.9, 0.8),
+    }
+}
+
+fn rough_glass(alpha: f32) -> Material {
+    Material::RoughDielectric {
+        ior: 1.5,
+        alpha,
+        transmittance: Rgb::new(1.0, 0.9, 0.8),
+    }
+}
+
+/// Several widths, from normal to grazing incidence, with the shading
+/// normal equal to the geometric one and tilted.
+fn microfacet_cases() -> Vec<(f32, Vec3, Vec3)> {
+    let tilted = Vec3::new(0.3, -0.2, 0.93).normalize();
+    vec![
+        (0.1, Vec3::new(0.2, 0.1, 0.97), Vec3::Z),
+        (0.3, Vec3::new(0.5, 0.1, 0.86), Vec3::Z),
+        (0.6, Vec3::new(-0.9, 0.3, 0.3), Vec3::Z),
+        (1.0, Vec3::Z, Vec3::Z),
+        (0.3, Vec3::new(0.1, 0.3, 0.95), tilted),
+    ]
+}
+
+#[test]
+fn conductor_sampling_matches_pdf() {
+    for (i, (alpha, wo, ns)) in microfacet_cases().into_iter().enumerate() {
+        let wo = wo.normalize();
+        let bsdf = conductor(alpha).bsdf(&surface(Vec3::Z, ns), wo);
+        assert!(!bsdf.is_delta());
+        check_sampling_matches_pdf(
+            &format!("conductor alpha {alpha}, wo {wo}, ns {ns}"),
+            &bsdf,
+            wo,
+            100 + i as u64,
+        );
+    }
+}
+
+#[test]
+fn rough_dielectric_sampling_matches_pdf() {
+    // Refraction narrows the lobe below 0.2, too narrow for the whole-sphere
+    // grid to integrate: those widths are tested on a cap, below.
+    let cases = microfacet_cases().into_iter().filter(|c| c.0 >= 0.2);
+    for (i, (alpha, wo, ns)) in cases.enumerate() {
+        // From outside, and the same direction from inside (eta inverted,
+        // total internal reflection at the grazing angles).
+        for side in [1.0, -1.0] {
+            let wo = (wo * Vec3::new(1.0, 1.0, side)).normalize();
+            let bsdf = rough_glass(alpha).bsdf(&surface(Vec3::Z, ns), wo);
+            check_sampling_matches_pdf(
+                &format!("rough dielectric alpha {alpha}, wo {wo}, ns {ns}"),
+                &bsdf,
+                wo,
+                200 + 2 * i as u64 + (side < 0.0) as u64,
+            );
+        }
+    }
+}
+
+/// A narrow lobe needs a fine grid: the cap around the normal, at normal incidence.
+#[test]
+fn narrow_microfacet_lobes_match_their_pdf() {
+    for (what, material, grid) in [
+        ("conductor", conductor(0.03), SphereGrid::band(0.95, 1.0)),
+        (
+            "rough dielectric",
+            rough_glass(0.03),
+            SphereGrid::band(0.95, 1.0),
+        ),
+        (
+            "rough dielectric, refraction",
+            rough_glass(0.1),
+            SphereGrid::band(-1.0, -0.95),
+        ),
+    ] {
+        let wo = Vec3::new(0.01, 0.0, 1.0).normalize();
+        let bsdf = material.bsdf(&surface(Vec3::Z, Vec3::Z), wo);
+        chi_square::check(
+            &format!("{what}, alpha 0.03"),
+            &grid,
+            200_000,
+            7,
+            |rng| {
+                let s = bsdf.sample(wo, (rng.f32(), rng.f32()), rng.f32(), Transport::Radiance)?;
+                Some((s.wi, s.pdf as f64))
+            },
+            |w| bsdf.pdf(wo, w) as f64,
+        );
+    }
+}
+
+/// Light paths scatter with the adjoint BSDF: its weights match
+/// `eval_mode(Importance) / pdf`, and it equals the radiance BSDF with the
+/// directions swapped, seen from `wi`'s side (f*(wo, wi) = f(wi, wo)).
+/// For reflection, that is plain reciprocity.
+#[test]
+fn microfacet_adjoint_is_the_swapped_bsdf() {
+    let mut rng = Rng::new(11);
+    for material in [conductor(0.4), rough_glass(0.2), rough_glass(0.7)] {
+        for (_, wo, _) in microfacet_cases() {
+            for side in [1.0, -1.0] {
+                let wo = (wo * Vec3::new(1.0, 1.0, side)).normalize();
+                let at = surface(Vec3::Z, Vec3::Z);
+                let bsdf = material.bsdf(&at, wo);
+                for _ in 0..2000 {
+                    let u = (rng.f32(), rng.f32());
+                    let Some(s) = bsdf.sample(wo, u, rng.f32(), Transport::Importance) else {
+                        continue;
+                    };
+                    let f_adjoint = bsdf.eval_mode(wo, s.wi, Transport::Importance);
+                    assert!(
+                        (f_adjoint / s.pdf).abs_diff_eq(s.weight, 2e-3 * s.weight.max_element()),
+                        "{material:?}: weight {} vs {}",
+                        s.weight,
+                        f_adjoint / s.pdf
+                    );
+                    // The BSDF seen from wi, evaluated for radiance from wo.
+                    let reverse = material.bsdf(&at, s.wi);
+                    let f_swapped = reverse.eval(s.wi, wo);
+                    let (cos_o, cos_i) = (wo.z.abs(), s.wi.z.abs());
+                    let lhs = f_adjoint / cos_i;
+                    let rhs = f_swapped / cos_o;
+                    assert!(
+                        lhs.abs_diff_eq(rhs, 2e-3 * lhs.max_element().max(1e-3)),
+                        "{material:?}: wo {wo}, wi {}: f* {lhs} vs swapped f {rhs}",
+                        s.wi
+                    );
+                    // The reverse density is the density of sampling wo from wi.
+                    let (_, reverse_pdf) = bsdf.pdfs(wo, s.wi);
+                    let expected = reverse.pdf(s.wi, wo);
+                    assert!(
+                        (reverse_pdf - expected).abs() <= 2e-3 * expected.max(1e-3),
+                        "{material:?}: reverse pdf {reverse_pdf} vs {expected}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Without absorption a rough glass surface loses nothing: reflection and
+/// refraction together carry all the importance that arrives (estimated
+/// by sampling; Smith masking makes single scattering lose a little at
+/// large widths, so only narrow widths are held to 1%).
+#[test]
+fn rough_dielectric_conserves_importance_at_small_widths() {
+    let mut rng = Rng::new(12);
+    let glass = Material::RoughDielectric {
+        ior: 1.5,
+        alpha: 0.05,
+        transmittance: Rgb::ONE,
+    };
+    for wo in [
+        Vec3::Z,
+        Vec3::new(0.5, 0.0, 0.86),
+        Vec3::new(0.3, 0.0, -0.95),
+    ] {
+        let wo = wo.normalize();
+        let bsdf = glass.bsdf(&surface(Vec3::Z, Vec3::Z), wo);
+        const N: usize = 200_000;
+        let mut total = 0.0f64;
+        for _ in 0..N {
+            if let Some(s) =
+                bsdf.sample(wo, (rng.f32(), rng.f32()), rng.f32(), Transport::Importance)
+            {
+                total += s.weight.x as f64;
+            }
+        }
+        let albedo = total / N as f64;
+        assert!((albedo - 1.0).abs() < 0.01, "wo {wo}: albedo {albedo}");
+    }
+}
+
+#[test]
+fn smooth_widths_are_delta_lobes() {
+    let wo = Vec3::new(0.3, 0.0, 0.95).normalize();
+    let at = surface(Vec3::Z, Vec3::Z);
+    let metal = conductor(0.0).bsdf(&at, wo);
+    assert!(metal.is_delta());
+    let s = metal
+        .sample(wo, (0.3, 0.7), 0.5, Transport::Radiance)
+        .unwrap();
+    assert!(s.delta && s.wi.abs_diff_eq(Vec3::new(-wo.x, -wo.y, wo.z), 1e-6));
+    let f = tracer::material::fresnel_conductor(
+        wo.z,
+        Rgb::new(0.18, 0.42, 1.37),
+        Rgb::new(3.42, 2.35, 1.77),
+    );
+    assert!(s.weight.abs_diff_eq(f * Rgb::new(1.0, 0.9, 0.8), 1e-6));
+    assert!(rough_glass(0.0).bsdf(&at, wo).is_delta());
 }

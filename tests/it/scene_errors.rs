@@ -396,6 +396,71 @@ fn an_unknown_type_is_named() {
     refused(&scene, "reinhard.json", &["film.tonemap", "reinhard"]);
 }
 
+/// Format 2's microfacet materials and thin lens: read in either version,
+/// each bad value named by its key.
+#[test]
+fn version_two_keys_are_read_and_checked() {
+    let mut scene = base_scene();
+    scene["format"] = json!(2);
+    scene["camera"]["aperture_radius"] = json!(0.1);
+    scene["camera"]["focus_distance"] = json!(3.0);
+    scene["materials"]["metal"] =
+        json!({"type": "conductor", "alpha": 0.2, "eta": [0.2, 0.9, 1.1], "k": [3.9, 2.4, 2.2]});
+    scene["materials"]["frosted"] = json!({"type": "rough_dielectric", "alpha": 0.3});
+    scene["materials"]["chrome"] = json!({"type": "conductor"});
+    let dir = tempfile::tempdir().unwrap();
+    let path = common::write_json(dir.path(), "v2.json", &scene);
+    tracer::scene::load(&path).unwrap();
+
+    let mut bad = scene.clone();
+    bad["format"] = json!(3);
+    refused(&bad, "v3.json", &["format", "versions 1 and 2"]);
+    let mut bad = scene.clone();
+    bad["camera"]["aperture_radius"] = json!(-0.1);
+    refused(
+        &bad,
+        "aperture.json",
+        &["camera.aperture_radius", "zero or greater"],
+    );
+    let mut bad = scene.clone();
+    bad["camera"]["focus_distance"] = json!(0);
+    refused(
+        &bad,
+        "focus.json",
+        &["camera.focus_distance", "greater than zero"],
+    );
+    let mut bad = scene.clone();
+    bad["materials"]["metal"]["alpha"] = json!(-1);
+    refused(
+        &bad,
+        "alpha.json",
+        &["materials.metal.alpha", "zero or greater"],
+    );
+    let mut bad = scene.clone();
+    bad["materials"]["metal"]
+        .as_object_mut()
+        .unwrap()
+        .remove("k");
+    refused(&bad, "no-k.json", &["materials.metal.k", "both"]);
+    let mut bad = scene.clone();
+    bad["materials"]["metal"]["eta"] = json!([0.2, -0.9, 1.1]);
+    refused(&bad, "eta.json", &["materials.metal.eta", "negative"]);
+    let mut bad = scene.clone();
+    bad["materials"]["frosted"]["roughness"] = json!(0.3);
+    refused(
+        &bad,
+        "roughness.json",
+        &["materials.frosted.roughness", "unknown key"],
+    );
+    let mut bad = scene;
+    bad["materials"]["frosted"]["ior"] = json!(0);
+    refused(
+        &bad,
+        "ior.json",
+        &["materials.frosted.ior", "greater than zero"],
+    );
+}
+
 #[test]
 fn degenerate_triangles_are_dropped_and_counted() {
     let mut scene = base_scene();

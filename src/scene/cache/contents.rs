@@ -69,10 +69,29 @@ struct MtlJson {
 #[derive(Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 enum MaterialJson {
-    Diffuse { albedo: [f32; 3] },
-    DiffuseTexture { texture: PathBuf },
-    Mirror { reflectance: [f32; 3] },
-    Dielectric { ior: f32, transmittance: [f32; 3] },
+    Diffuse {
+        albedo: [f32; 3],
+    },
+    DiffuseTexture {
+        texture: PathBuf,
+    },
+    Mirror {
+        reflectance: [f32; 3],
+    },
+    Dielectric {
+        ior: f32,
+        transmittance: [f32; 3],
+    },
+    Conductor {
+        alpha: f32,
+        ior: Option<[[f32; 3]; 2]>,
+        reflectance: [f32; 3],
+    },
+    RoughDielectric {
+        ior: f32,
+        alpha: f32,
+        transmittance: [f32; 3],
+    },
 }
 
 impl Meta {
@@ -89,6 +108,20 @@ impl Meta {
                         MaterialJson::Dielectric { ior, transmittance } => {
                             ior.is_finite() && finite(transmittance)
                         }
+                        MaterialJson::Conductor {
+                            alpha,
+                            ior,
+                            reflectance,
+                        } => {
+                            alpha.is_finite()
+                                && finite(reflectance)
+                                && ior.is_none_or(|[eta, k]| finite(&eta) && finite(&k))
+                        }
+                        MaterialJson::RoughDielectric {
+                            ior,
+                            alpha,
+                            transmittance,
+                        } => ior.is_finite() && alpha.is_finite() && finite(transmittance),
                     }
             })
     }
@@ -126,6 +159,24 @@ impl Meta {
                                 transmittance: transmittance.to_array(),
                             }
                         }
+                        MaterialDesc::Conductor {
+                            alpha,
+                            ior,
+                            reflectance,
+                        } => MaterialJson::Conductor {
+                            alpha: *alpha,
+                            ior: ior.map(|(eta, k)| [eta.to_array(), k.to_array()]),
+                            reflectance: reflectance.to_array(),
+                        },
+                        MaterialDesc::RoughDielectric {
+                            ior,
+                            alpha,
+                            transmittance,
+                        } => MaterialJson::RoughDielectric {
+                            ior: *ior,
+                            alpha: *alpha,
+                            transmittance: transmittance.to_array(),
+                        },
                     },
                 })
                 .collect(),
@@ -154,6 +205,24 @@ fn mtl_record(m: MtlJson) -> MtlRecord {
             },
             MaterialJson::Dielectric { ior, transmittance } => MaterialDesc::Dielectric {
                 ior,
+                transmittance: Rgb::from_array(transmittance),
+            },
+            MaterialJson::Conductor {
+                alpha,
+                ior,
+                reflectance,
+            } => MaterialDesc::Conductor {
+                alpha,
+                ior: ior.map(|[eta, k]| (Rgb::from_array(eta), Rgb::from_array(k))),
+                reflectance: Rgb::from_array(reflectance),
+            },
+            MaterialJson::RoughDielectric {
+                ior,
+                alpha,
+                transmittance,
+            } => MaterialDesc::RoughDielectric {
+                ior,
+                alpha,
                 transmittance: Rgb::from_array(transmittance),
             },
         },
