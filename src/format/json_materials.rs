@@ -92,17 +92,12 @@ impl Ctx<'_> {
                 let ior = match (c.eta, c.k) {
                     (Some(eta), Some(k)) => Some((eta.0, k.0)),
                     (None, None) => None,
-                    (Some(_), None) => {
+                    (eta, _) => {
+                        let missing = if eta.is_some() { "k" } else { "eta" };
                         return Err(self.err(
-                            &format!("{path}.k"),
+                            &format!("{path}.{missing}"),
                             "missing: give both `eta` and `k` (or neither, for Fresnel 1)",
-                        ))
-                    }
-                    (None, Some(_)) => {
-                        return Err(self.err(
-                            &format!("{path}.eta"),
-                            "missing: give both `eta` and `k` (or neither, for Fresnel 1)",
-                        ))
+                        ));
                     }
                 };
                 MaterialDesc::Conductor {

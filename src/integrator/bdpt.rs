@@ -15,8 +15,8 @@
 //! BSDF vertex has `d_vcm = 0` (nothing can connect to it), and the
 //! light point seen directly (s = 1, t = 1) is left to s = 0.
 
-use super::connect::{visible, Endpoint};
-use super::light_path::{camera_splat, follow_light_walk, sample_lens};
+use super::connect::{sample_lens, visible, Endpoint};
+use super::light_path::{camera_splat, follow_light_walk};
 use super::mis::mis;
 use super::sink::SampleSink;
 use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, Walk};
@@ -61,11 +61,7 @@ impl Bidirectional {
         self.trace_light_path(scene, camera, &mut light_sampler, light_vertices, sink);
         let (x, y) = (pixel.x as f32 + jx, pixel.y as f32 + jy);
         let index = y as u32 * camera.width() + x as u32;
-        let ray = if camera.is_pinhole() {
-            camera.ray(x, y)
-        } else {
-            camera.ray_from(camera.lens_point(camera_sampler.next_2d()), x, y)
-        };
+        let ray = camera.ray_from(sample_lens(camera, &mut camera_sampler), x, y);
         let camera_pdf = camera.direction_pdf(ray.dir);
         if camera_pdf <= 0.0 {
             return Rgb::ZERO;

@@ -7,6 +7,7 @@ use crate::color::Rgb;
 use crate::geometry::ray::offset_origin;
 use crate::geometry::{Ray, SurfacePoint};
 use crate::light::IncidentSample;
+use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
 
@@ -85,6 +86,17 @@ pub fn unoccluded(scene: &Scene, surface: &SurfacePoint, sample: &IncidentSample
         Ray::segment(origin, to_target / distance, distance)
     };
     !scene.occluded(&ray)
+}
+
+/// A point on the lens, for a camera path's first ray or for a light
+/// path's connections to the camera (one per path). A pinhole draws no
+/// random numbers, so pinhole images do not depend on this.
+pub(super) fn sample_lens(camera: &Camera, sampler: &mut Sampler) -> Vec3 {
+    if camera.is_pinhole() {
+        camera.position
+    } else {
+        camera.lens_point(sampler.next_2d())
+    }
 }
 
 /// What a light-side point at `position` contributes to the pixel it

@@ -61,17 +61,6 @@ pub fn follow_light_walk(
     }
 }
 
-/// The lens point a light path's camera connections go to: one per path,
-/// drawn after the path's start (a pinhole draws nothing, so pinhole
-/// images do not depend on it).
-pub(super) fn sample_lens(camera: &Camera, sampler: &mut Sampler) -> Vec3 {
-    if camera.is_pinhole() {
-        camera.position
-    } else {
-        camera.lens_point(sampler.next_2d())
-    }
-}
-
 /// A light vertex seen by the camera: where it lands, and its splat before
 /// any MIS weight (`None` when it is outside the image, behind the camera,
 /// occluded, or reflects nothing towards the camera).

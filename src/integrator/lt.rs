@@ -5,8 +5,9 @@
 //! a real check. Point and spot lights have no area and are never seen
 //! directly by the pinhole camera, in any integrator.
 
+use super::connect::sample_lens;
 use super::connect::{visible, CameraConnection, Endpoint};
-use super::light_path::{camera_splat, follow_light_walk, sample_lens};
+use super::light_path::{camera_splat, follow_light_walk};
 use super::sink::SampleSink;
 use super::walk::{light_paths_per_pass, start_light_walk, LightStart};
 use crate::camera::Camera;

@@ -49,8 +49,9 @@ pub enum Integrator {
 }
 
 /// Which sample this is: sample `index` of pixel (`x`, `y`) of a render
-/// with `seed`. Every random number of the sample follows from these, so
-/// an image is the same whichever thread takes which tile.
+/// with a given seed (made by [`PixelSample::new`]). Every random number of
+/// the sample follows from these, so an image is the same whichever thread
+/// takes which tile.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PixelSample {
     /// The camera and light paths' seeds for this pixel (see [`PixelSample::new`]).
@@ -61,8 +62,6 @@ pub struct PixelSample {
     pub y: u32,
     /// The sample's index within the pixel (the render's sample offset included).
     pub index: u64,
-    /// The render's seed.
-    pub seed: u64,
 }
 
 impl PixelSample {
@@ -78,7 +77,6 @@ impl PixelSample {
             x,
             y,
             index,
-            seed,
         }
     }
 

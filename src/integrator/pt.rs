@@ -10,7 +10,7 @@
 //! light needs 2. Russian roulette on the throughput ends long paths without
 //! bias.
 
-use super::connect::unoccluded;
+use super::connect::{sample_lens, unoccluded};
 use super::mis::power_heuristic;
 use super::PixelSample;
 use super::ROULETTE_START;
@@ -37,11 +37,7 @@ impl PathTracer {
         let mut sampler = pixel.camera_sampler();
         let (jx, jy) = sampler.next_2d();
         let (x, y) = (pixel.x as f32 + jx, pixel.y as f32 + jy);
-        let ray = if camera.is_pinhole() {
-            camera.ray(x, y)
-        } else {
-            camera.ray_from(camera.lens_point(sampler.next_2d()), x, y)
-        };
+        let ray = camera.ray_from(sample_lens(camera, &mut sampler), x, y);
         radiance(scene, ray, &mut sampler, self.max_depth)
     }
 }

@@ -83,7 +83,7 @@ impl Walk {
             self.d_vcm = 0.0;
             self.d_vc *= mis(cos_out);
         } else {
-            let reverse_pdf = bsdf.reverse_pdf(wo, s.wi);
+            let (_, reverse_pdf) = bsdf.pdfs(wo, s.wi);
             self.d_vc = mis(cos_out / s.pdf) * (self.d_vc * mis(reverse_pdf) + self.d_vcm);
             self.d_vcm = mis(1.0 / s.pdf);
         }

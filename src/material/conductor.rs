@@ -3,7 +3,7 @@
 //! [`SMOOTH_ALPHA`] a Fresnel-weighted mirror, as its `conductor`.
 
 use super::microfacet::{Ggx, SMOOTH_ALPHA};
-use super::reflect_local;
+use super::{reflect, reflect_local};
 use crate::color::Rgb;
 use glam::Vec3;
 
@@ -86,7 +86,7 @@ impl Conductor {
         if cos_om <= 0.0 {
             return None;
         }
-        let wi = 2.0 * cos_om * m - wo;
+        let wi = reflect(wo, m, cos_om);
         if wi.z <= 0.0 {
             return None;
         }

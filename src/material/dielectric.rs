@@ -1,7 +1,7 @@
 //! Smooth dielectric: Fresnel-weighted choice between mirror reflection and
 //! refraction by Snell's law.
 
-use super::{reflect_local, safe_sqrt, Transport};
+use super::{reflect_local, refract, safe_sqrt, Transport};
 use crate::color::Rgb;
 use glam::Vec3;
 
@@ -36,9 +36,7 @@ pub fn sample(
         // Reflection with probability F: weight F / F.
         return Some((reflect_local(wo), Rgb::ONE, f, true));
     }
-    let sin2_t = (1.0 - cos_o * cos_o) / (eta * eta);
-    let cos_t = safe_sqrt(1.0 - sin2_t);
-    let wi = (-wo / eta + (cos_o / eta - cos_t) * Vec3::Z).normalize();
+    let wi = refract(wo, Vec3::Z, cos_o, eta);
     // Radiance is compressed into the smaller solid angle of the denser side:
     // it scales by 1/eta² on crossing; importance does not (Veach, §5.2).
     let scale = match mode {

@@ -307,20 +307,6 @@ impl Bsdf {
         }
     }
 
-    /// The second density of [`Bsdf::pdfs`] alone: of sampling `wo` given `wi`.
-    pub fn reverse_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let Some(reflected) = self.side(wi) else {
-            return 0.0;
-        };
-        match &self.kind {
-            BsdfKind::Diffuse { .. } if reflected => diffuse::pdf(self.frame.to_local(wo)),
-            BsdfKind::Conductor(_) | BsdfKind::RoughDielectric(_) => {
-                self.microfacet_pdfs(wo, wi, reflected).1
-            }
-            _ => 0.0,
-        }
-    }
-
     /// Like [`Bsdf::eval`], for light flowing from `wi` to `wo` (radiance) or
     /// from `wo` to `wi` (importance, on light paths). For importance the
     /// cosine factor carries the correction that keeps shading normals
@@ -386,6 +372,20 @@ impl Bsdf {
 /// Reflects `w` about the +z axis of a local frame.
 pub(crate) fn reflect_local(w: Vec3) -> Vec3 {
     Vec3::new(-w.x, -w.y, w.z)
+}
+
+/// Reflects `w` about the unit normal `n`, given `cos = w·n`.
+pub(crate) fn reflect(w: Vec3, n: Vec3, cos: f32) -> Vec3 {
+    2.0 * cos * n - w
+}
+
+/// Refracts `w` through a surface with unit normal `n` on `w`'s side
+/// (`cos = w·n > 0`) into a medium `eta` times denser, by Snell's law;
+/// the caller has ruled out total internal reflection.
+pub(crate) fn refract(w: Vec3, n: Vec3, cos: f32, eta: f32) -> Vec3 {
+    let sin2_t = (1.0 - cos * cos) / (eta * eta);
+    let cos_t = safe_sqrt(1.0 - sin2_t);
+    (-w / eta + (cos / eta - cos_t) * n).normalize()
 }
 
 pub(crate) fn safe_sqrt(x: f32) -> f32 {

@@ -11,7 +11,7 @@
 
 use super::dielectric::{self, fresnel_dielectric};
 use super::microfacet::{Ggx, SMOOTH_ALPHA};
-use super::{safe_sqrt, Transport};
+use super::{reflect, refract, Transport};
 use crate::color::Rgb;
 use glam::Vec3;
 
@@ -145,7 +145,7 @@ impl RoughDielectric {
         let visible = ggx.visible_pdf(wo, m);
         let f = fresnel_dielectric(cos_om, self.eta);
         if u_lobe < f {
-            let wi = 2.0 * cos_om * m - wo;
+            let wi = reflect(wo, m, cos_om);
             if wi.z <= 0.0 {
                 return None;
             }
@@ -153,9 +153,7 @@ impl RoughDielectric {
             // f cos / pdf = G1(wi) with the lobe chosen by Fresnel.
             return (pdf > 0.0).then(|| (wi, Rgb::splat(ggx.g1(wi, m)), pdf, false));
         }
-        let sin2_t = (1.0 - cos_om * cos_om) / (self.eta * self.eta);
-        let cos_t = safe_sqrt(1.0 - sin2_t);
-        let wi = (-wo / self.eta + (cos_om / self.eta - cos_t) * m).normalize();
+        let wi = refract(wo, m, cos_om, self.eta);
         let cos_im = wi.dot(m);
         if wi.z >= 0.0 || cos_im >= 0.0 {
             return None;

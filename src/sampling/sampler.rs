@@ -99,11 +99,6 @@ impl PixelSeed {
 }
 
 impl Sampler {
-    /// The sampler for sample `index` of pixel (`x`, `y`) of an image rendered with `seed`.
-    pub fn new(seed: u64, x: u32, y: u32, index: u64) -> Sampler {
-        Sampler::for_pixel(PixelSeed::new(seed, x, y), index)
-    }
-
     /// The sampler for sample `index` of the pixel whose seed is `pixel`.
     pub fn for_pixel(pixel: PixelSeed, index: u64) -> Sampler {
         let block = (index / SEQUENCE_LENGTH as u64) as u32;

@@ -972,22 +972,9 @@ fn merge_part(dir: &Path, name: &str) -> PathBuf {
         *p = glam::Vec3::new(k as f32 * 0.1, 0.5, 2.0);
     }
     let metadata = tracer::film::metadata::Metadata {
-        program: "tracer fuzz".into(),
-        scene_hash: "ab".repeat(32),
-        integrator: "pt".into(),
-        seed: 7,
-        max_depth: 5,
-        width: 6,
-        height: 4,
-        crop: [0, 0, 6, 4],
-        spp: 4,
-        max_spp: 4,
-        samples: vec![(0, 4)],
-        render_seconds: 1.5,
         passes: 3,
-        stopped_by: "spp".into(),
         noise: Some(0.1),
-        pixels_hash: None,
+        ..common::metadata(6, 4, 4)
     };
     let path = dir.join(name);
     tracer::film::write::write_image_with(

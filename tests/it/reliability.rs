@@ -137,27 +137,6 @@ fn a_trs_display_too_large_or_a_field_of_view_not_above_zero_is_refused_with_its
 // ---------------------------------------------------------------------------
 // 2. Output temporary files are random and exclusive.
 
-fn metadata() -> tracer::film::metadata::Metadata {
-    tracer::film::metadata::Metadata {
-        program: "tracer test".into(),
-        scene_hash: "0".repeat(64),
-        integrator: "pt".into(),
-        seed: 1,
-        max_depth: 4,
-        width: 7,
-        height: 5,
-        crop: [0, 0, 7, 5],
-        spp: 1,
-        max_spp: 1,
-        samples: vec![(0, 1)],
-        render_seconds: 0.5,
-        passes: 1,
-        stopped_by: "spp".into(),
-        noise: None,
-        pixels_hash: None,
-    }
-}
-
 /// Symbolic links planted at every temporary name the writer used to
 /// choose (`.NAME.PID-N.tmp`, for the image and its sidecar) are left
 /// alone: the victim they point at is unchanged, the image and sidecar are
@@ -190,8 +169,13 @@ fn symbolic_links_at_the_old_temporary_names_are_never_written_through() {
     // SAFETY: umask(2) only swaps the process's file mode mask; the old
     // one is put back below.
     let old_umask = unsafe { libc::umask(0o022) };
-    let written =
-        tracer::film::write::write_image_with(&out, &image, Tonemap::Srgb, 0.0, Some(&metadata()));
+    let written = tracer::film::write::write_image_with(
+        &out,
+        &image,
+        Tonemap::Srgb,
+        0.0,
+        Some(&common::metadata(7, 5, 1)),
+    );
     // SAFETY: as above.
     unsafe { libc::umask(old_umask) };
     written.unwrap();

@@ -75,6 +75,29 @@ pub fn write(path: &Path, text: impl AsRef<[u8]>) -> PathBuf {
 }
 
 /// Writes `json` as `name` in `dir` and returns its path.
+/// Metadata of a finished `width` × `height` render of `spp` samples per
+/// pixel in one pass: what a writer needs to put beside a test image.
+pub fn metadata(width: u32, height: u32, spp: u32) -> tracer::film::metadata::Metadata {
+    tracer::film::metadata::Metadata {
+        program: "tracer test".into(),
+        scene_hash: "0".repeat(64),
+        integrator: "pt".into(),
+        seed: 1,
+        max_depth: 4,
+        width,
+        height,
+        crop: [0, 0, width, height],
+        spp,
+        max_spp: spp,
+        samples: vec![(0, spp)],
+        render_seconds: 0.5,
+        passes: 1,
+        stopped_by: "spp".into(),
+        noise: None,
+        pixels_hash: None,
+    }
+}
+
 pub fn write_scene(dir: &Path, name: &str, json: &str) -> PathBuf {
     write(&dir.join(name), json)
 }
