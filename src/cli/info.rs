@@ -22,12 +22,13 @@ pub fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
         );
     }
     println!(
-        "lights:     {} (area triangles {}, point {}, spot {}, directional {})",
+        "lights:     {} (area triangles {}, point {}, spot {}, directional {}, environment {})",
         scene.lights.len(),
         count(|l| matches!(l, Light::Area(_))),
         count(|l| matches!(l, Light::Point(_))),
         count(|l| matches!(l, Light::Spot(_))),
         count(|l| matches!(l, Light::Directional(_))),
+        count(|l| matches!(l, Light::Environment(_))),
     );
     println!(
         "materials:  {} ({})",

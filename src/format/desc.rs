@@ -354,6 +354,24 @@ pub enum LightDesc {
         /// Irradiance on a surface facing the light, per channel.
         irradiance: Rgb,
     },
+    /// Light from infinitely far away in every direction (format 2).
+    Environment {
+        /// What the sky looks like: one colour, or an image.
+        sky: SkyDesc,
+        /// Multiplies the radiance; non-negative.
+        scale: f32,
+        /// Turns the sky from its own frame into the world's (a rotation).
+        rotation: glam::Mat3,
+    },
+}
+
+/// The radiance of an environment light.
+#[derive(Clone, Debug)]
+pub enum SkyDesc {
+    /// The same radiance from every direction.
+    Constant(Rgb),
+    /// A latitude–longitude image (resolved path).
+    Image(PathBuf),
 }
 
 /// A scene as read from its file: everything [`crate::scene::build`] needs.

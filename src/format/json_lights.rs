@@ -1,7 +1,9 @@
-//! The `lights` section of a JSON scene: point, spot and directional lights.
+//! The `lights` section of a JSON scene: point, spot, directional and
+//! environment lights.
 
 use super::desc::*;
 use super::json::Ctx;
+use super::resolve;
 use crate::Result;
 use serde::Deserialize;
 use serde_json::Value;
@@ -31,7 +33,23 @@ impl Ctx<'_> {
             direction: V3,
             irradiance: Color,
         }
-        let (kind, map) = self.tagged(value, path, &["point", "spot", "directional"])?;
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Environment {
+            #[serde(default)]
+            radiance: Option<Color>,
+            #[serde(default)]
+            file: Option<String>,
+            #[serde(default)]
+            scale: Option<NonNegative>,
+            #[serde(default)]
+            transform: Option<Value>,
+        }
+        let (kind, map) = self.tagged(
+            value,
+            path,
+            &["point", "spot", "directional", "environment"],
+        )?;
         let map = Value::Object(map);
         Ok(match kind.as_str() {
             "point" => {
@@ -70,6 +88,34 @@ impl Ctx<'_> {
                     falloff_start: start,
                 }
             }
+            "environment" => {
+                let e: Environment = self.typed(map, path)?;
+                let sky = match (e.radiance, e.file) {
+                    (Some(c), None) => SkyDesc::Constant(c.0),
+                    (None, Some(f)) => SkyDesc::Image(resolve(self.file, &f)),
+                    (Some(_), Some(_)) => {
+                        return Err(self.err(
+                            path,
+                            "give either \"radiance\" (a constant sky) or \"file\" (an image), not both",
+                        ))
+                    }
+                    (None, None) => {
+                        return Err(self.err(
+                            path,
+                            "missing required key (one of: radiance, file)",
+                        ))
+                    }
+                };
+                let rotation = match e.transform {
+                    None => glam::Mat3::IDENTITY,
+                    Some(t) => self.rotation(t, &format!("{path}.transform"))?,
+                };
+                LightDesc::Environment {
+                    sky,
+                    scale: e.scale.map_or(1.0, |s| s.0),
+                    rotation,
+                }
+            }
             _ => {
                 let d: Directional = self.typed(map, path)?;
                 if d.direction.0.length_squared() == 0.0 {
@@ -84,5 +130,24 @@ impl Ctx<'_> {
                 }
             }
         })
+    }
+}
+
+impl Ctx<'_> {
+    /// A transform that may only turn things: the environment is infinitely
+    /// far away, so moving or scaling it would mean nothing.
+    fn rotation(&self, value: Value, path: &str) -> Result<glam::Mat3> {
+        let t = self.transform(value, path)?;
+        let m = glam::Mat3::from_mat4(t.matrix);
+        let translation = t.matrix.w_axis.truncate();
+        let orthonormal = (m.transpose() * m).abs_diff_eq(glam::Mat3::IDENTITY, 1e-4);
+        if translation != glam::Vec3::ZERO || !orthonormal || m.determinant() < 0.0 {
+            return Err(self.err(
+                path,
+                "expected a rotation only (an environment is infinitely far away: \
+                 it cannot be moved, scaled or mirrored)",
+            ));
+        }
+        Ok(m)
     }
 }

@@ -199,7 +199,7 @@ impl Ctx<'_> {
         Ok(())
     }
 
-    fn transform(&self, value: Value, path: &str) -> Result<Transform> {
+    pub(super) fn transform(&self, value: Value, path: &str) -> Result<Transform> {
         #[derive(Deserialize)]
         #[serde(deny_unknown_fields)]
         struct TransformFile {

@@ -142,6 +142,16 @@ impl Bidirectional {
             sampler.start_vertex();
             let ray = Ray::new(walk.origin, walk.dir);
             let Some(hit) = scene.intersect(&ray) else {
+                if scene.environment.is_some() {
+                    let (le, weight) = escaped(scene, ray.dir, &walk);
+                    add(
+                        &mut result,
+                        (walk.throughput * le, weight),
+                        0,
+                        walk.length + 1,
+                        sink,
+                    );
+                }
                 break;
             };
             let surface = scene.surface(&hit);
@@ -196,6 +206,29 @@ fn hit_emitter(scene: &Scene, light: usize, wo: Vec3, walk: &Walk) -> Weighted {
     let (direct_pdf, emission_pdf) = area.pdfs_for_hit(wo);
     let w_camera = mis(direct_pdf * pick) * walk.d_vcm + mis(emission_pdf * pick) * walk.d_vc;
     (emitted, 1.0 / (1.0 + w_camera))
+}
+
+/// s = 0 for the environment: the camera path has left the scene along
+/// `dir`. As eq. 43, with the environment's densities: light sampling
+/// chooses a direction (solid angle), emission a direction and a point on
+/// the scene's disk; the last segment has no length, so `arrive` was never
+/// called for it.
+#[inline(never)]
+fn escaped(scene: &Scene, dir: Vec3, walk: &Walk) -> Weighted {
+    let Some((index, environment)) = scene.environment() else {
+        return NOTHING;
+    };
+    let radiance = environment.radiance(dir);
+    if is_black(radiance) {
+        return NOTHING;
+    }
+    if walk.length == 1 {
+        return (radiance, 1.0);
+    }
+    let pick = scene.light_selector.pmf(index);
+    let pdfs = environment.pdfs_for_direction(dir);
+    let w_camera = mis(pdfs.direct * pick) * walk.d_vcm + mis(pdfs.emission * pick) * walk.d_vc;
+    (radiance, 1.0 / (1.0 + w_camera))
 }
 
 /// s = 1: a point chosen on a light, connected to the camera vertex (eq. 44).

@@ -12,7 +12,8 @@ use super::sink::SampleSink;
 use super::walk::{light_paths_per_pass, start_light_walk, LightStart};
 use crate::camera::Camera;
 use crate::color::is_black;
-use crate::light::Light;
+use crate::geometry::Ray;
+use crate::light::{EnvironmentLight, Light};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -49,7 +50,8 @@ impl LightTracer {
     }
 }
 
-/// s = 1, t = 1: the point chosen on an area light, seen by the camera.
+/// s = 1, t = 1: the point chosen on an area light, or the direction
+/// chosen in the environment, seen by the camera.
 fn splat_light_point(
     scene: &Scene,
     camera: &Camera,
@@ -58,8 +60,13 @@ fn splat_light_point(
     paths: f32,
     sink: &mut SampleSink,
 ) {
-    let Light::Area(light) = &scene.lights[start.light] else {
-        return;
+    let light = match &scene.lights[start.light] {
+        Light::Area(light) => light,
+        Light::Environment(environment) => {
+            splat_sky(scene, camera, lens, environment, start, paths, sink);
+            return;
+        }
+        _ => return,
     };
     let emission = &start.emission;
     let Some(c) = CameraConnection::new(camera, lens, emission.origin) else {
@@ -76,4 +83,29 @@ fn splat_light_point(
         let value = le * cos / (start.pick * emission.direct_pdf_area);
         sink.emit(c.pixel, c.splat(value, paths));
     }
+}
+
+/// s = 1, t = 1 for the environment: the sampled direction, if the camera
+/// sees the sky that way. As for an area light, but the solid-angle density
+/// of the direction replaces area density × cos / distance².
+fn splat_sky(
+    scene: &Scene,
+    camera: &Camera,
+    lens: Vec3,
+    environment: &EnvironmentLight,
+    start: &LightStart,
+    paths: f32,
+    sink: &mut SampleSink,
+) {
+    let to_sky = -start.emission.dir;
+    // A point one unit away along the direction projects where the direction does.
+    let Some(c) = CameraConnection::new(camera, lens, lens + to_sky) else {
+        return;
+    };
+    if scene.occluded(&Ray::new(lens, to_sky)) {
+        return;
+    }
+    let radiance = environment.radiance(to_sky);
+    let value = radiance / (start.pick * start.emission.direct_pdf_area);
+    sink.emit(c.pixel, c.splat(value, paths));
 }

@@ -55,6 +55,9 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
     loop {
         sampler.start_vertex();
         let Some(hit) = scene.intersect(&ray) else {
+            if scene.environment.is_some() {
+                result += throughput * escaped(scene, ray.dir, previous_delta, previous_pdf);
+            }
             break;
         };
         segments += 1;
@@ -114,6 +117,21 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         }
     }
     result
+}
+
+/// The environment seen along `dir` by a ray that left the scene, weighted
+/// against light sampling as an emitter hit is.
+#[inline(never)]
+fn escaped(scene: &Scene, dir: glam::Vec3, previous_delta: bool, previous_pdf: f32) -> Rgb {
+    let Some((index, environment)) = scene.environment() else {
+        return Rgb::ZERO;
+    };
+    let radiance = environment.radiance(dir);
+    if previous_delta {
+        return radiance;
+    }
+    let light_pdf = scene.light_selector.pmf(index) * environment.pdf_direction(dir);
+    radiance * power_heuristic(previous_pdf, light_pdf)
 }
 
 /// One light sample at a non-delta surface, MIS-weighted against BSDF sampling.

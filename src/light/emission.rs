@@ -26,7 +26,8 @@ pub struct EmissionSample {
     pub value: Rgb,
     /// Position density × direction density (directional: position only).
     pub emission_pdf: f32,
-    /// Density of light sampling choosing this position, in area measure (1 for deltas).
+    /// Density of light sampling choosing this position, in area measure (1
+    /// for deltas); for the environment, of choosing the direction, in solid angle.
     pub direct_pdf_area: f32,
     /// Cosine between the emitted direction and the light's normal (1 if none).
     pub cos_light: f32,
@@ -40,7 +41,8 @@ pub struct EmissionSample {
 #[derive(Clone, Copy, Debug)]
 pub struct LightPdfs {
     /// Density of light sampling choosing this point from the receiver: solid
-    /// angle for area lights, d² for point and spot lights, 1 for directional ones.
+    /// angle for area and environment lights, d² for point and spot lights,
+    /// 1 for directional ones.
     pub direct: f32,
     /// Density of emitting along the connecting direction: position (area
     /// measure) × direction (solid angle); directional lights: position only.
@@ -58,7 +60,7 @@ impl Light {
 
     /// Lights at infinity: the first segment of their paths has no distance.
     pub fn is_finite(&self) -> bool {
-        !matches!(self, Light::Directional(_))
+        !matches!(self, Light::Directional(_) | Light::Environment(_))
     }
 
     /// Starts a light path: a point on the light and a direction, from four
@@ -69,6 +71,7 @@ impl Light {
             Light::Point(l) => Some(l.sample_emission(u_dir)),
             Light::Spot(l) => l.sample_emission(u_dir),
             Light::Directional(l) => Some(l.sample_emission(u_pos)),
+            Light::Environment(l) => l.sample_emission(u_pos, u_dir),
         }
     }
 
@@ -86,6 +89,7 @@ impl Light {
             Light::Point(l) => l.pdfs_for_incident(distance),
             Light::Spot(l) => l.pdfs_for_incident(distance),
             Light::Directional(l) => l.pdfs_for_incident(),
+            Light::Environment(l) => l.pdfs_for_direction(wi),
         }
     }
 }
@@ -94,7 +98,7 @@ impl Light {
 mod tests {
     use super::*;
     use crate::geometry::Triangle;
-    use crate::light::{AreaLight, DirectionalLight, PointLight, SpotLight};
+    use crate::light::{AreaLight, DirectionalLight, EnvironmentLight, PointLight, SpotLight};
 
     /// Emission samples carry power: E[value / pdf] over all directions is
     /// the light's flux, which selection by power assumes.
@@ -124,6 +128,11 @@ mod tests {
                 scene_center: Vec3::ZERO,
                 scene_radius: 2.0,
             }),
+            Light::Environment(EnvironmentLight::constant(
+                Rgb::new(0.5, 1.0, 2.0),
+                Vec3::ONE,
+                3.0,
+            )),
         ];
         for light in &lights {
             let n = 256;

@@ -1,5 +1,6 @@
 //! Light sources. Point, spot and directional lights are deltas (they cannot
-//! be hit by a ray); area lights are emissive triangles of the scene.
+//! be hit by a ray); area lights are emissive triangles of the scene; the
+//! environment is seen by every ray that leaves the scene.
 //!
 //! Each light can be sampled from a receiving point ([`Light::sample_incident`])
 //! and reports its emitted power, which drives light selection ([`LightSelector`]).
@@ -7,6 +8,7 @@
 mod area;
 mod directional;
 mod emission;
+mod environment;
 mod point;
 mod selection;
 mod spot;
@@ -14,6 +16,7 @@ mod spot;
 pub use area::AreaLight;
 pub use directional::DirectionalLight;
 pub use emission::{EmissionSample, LightPdfs};
+pub use environment::{EnvironmentLight, EnvironmentMap};
 pub use point::PointLight;
 pub use selection::LightSelector;
 pub use spot::SpotLight;
@@ -32,6 +35,9 @@ pub enum Light {
     Directional(DirectionalLight),
     /// Emissive triangle: the only kind a ray can hit.
     Area(AreaLight),
+    /// Light from infinitely far away in every direction: what a ray that
+    /// leaves the scene sees.
+    Environment(EnvironmentLight),
 }
 
 /// Light arriving at a receiving point from a sampled point on a light.
@@ -39,7 +45,7 @@ pub enum Light {
 pub struct IncidentSample {
     /// Unit direction from the receiver towards the light.
     pub wi: Vec3,
-    /// Distance to the light point; infinite for directional lights.
+    /// Distance to the light point; infinite for directional and environment lights.
     pub distance: f32,
     /// The sampled point on the light (for shadow rays).
     pub point: Vec3,
@@ -62,7 +68,10 @@ impl Light {
     /// Whether the light is a delta (point, spot, directional), so paths cannot
     /// hit it and only light sampling reaches it.
     pub fn is_delta(&self) -> bool {
-        !matches!(self, Light::Area(_))
+        matches!(
+            self,
+            Light::Point(_) | Light::Spot(_) | Light::Directional(_)
+        )
     }
 
     /// Total emitted power (flux), averaged over RGB.
@@ -72,6 +81,7 @@ impl Light {
             Light::Spot(l) => l.power(),
             Light::Directional(l) => l.power(),
             Light::Area(l) => l.power(),
+            Light::Environment(l) => l.power(),
         }
     }
 
@@ -82,6 +92,7 @@ impl Light {
             Light::Spot(l) => l.sample_incident(receiver),
             Light::Directional(l) => Some(l.sample_incident(receiver)),
             Light::Area(l) => l.sample_incident(receiver, u),
+            Light::Environment(l) => l.sample_incident(receiver, u),
         }
     }
 }

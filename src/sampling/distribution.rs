@@ -59,7 +59,19 @@ impl Distribution1D {
         }
         (i, self.pmf[i])
     }
+
+    /// [`Distribution1D::sample`], and `u` remapped to [0, 1) within the chosen
+    /// entry's share of the cumulative sum, so one number can also place a
+    /// point inside the entry.
+    pub fn sample_remapped(&self, u: f32) -> (usize, f32, f32) {
+        let (i, pmf) = self.sample(u);
+        let within = ((u - self.cdf[i]) / pmf).clamp(0.0, ONE_MINUS_EPSILON);
+        (i, pmf, within)
+    }
 }
+
+/// The largest f32 below one.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 #[cfg(test)]
 mod tests {

@@ -8,14 +8,20 @@ use super::estimate;
 use super::{Scene, TriangleShading};
 use crate::bvh::{BuildOptions, WideBvh};
 use crate::color::Rgb;
-use crate::format::desc::{LightDesc, MaterialDesc, SceneDesc};
+use crate::error::Error;
+use crate::film::read::read_texture;
+use crate::format::desc::{LightDesc, MaterialDesc, SceneDesc, SkyDesc};
 use crate::format::read_scene;
 use crate::geometry::{Aabb, Triangle};
-use crate::light::{AreaLight, DirectionalLight, Light, LightSelector, PointLight, SpotLight};
+use crate::light::{
+    AreaLight, DirectionalLight, EnvironmentLight, EnvironmentMap, Light, LightSelector,
+    PointLight, SpotLight,
+};
 use crate::material::{Albedo, Material};
 use crate::pod_array::PodArray;
 use crate::Result;
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Reads the scene file at `path` and builds its scene (no cache).
@@ -119,8 +125,27 @@ pub fn build_limited(
             e.two_sided,
         )));
     }
-    for (_, l) in &desc.lights {
-        lights.push(make_light(l, &bounds));
+    let mut environment = None;
+    for (path, l) in &desc.lights {
+        let light = match l {
+            LightDesc::Environment {
+                sky,
+                scale,
+                rotation,
+            } => {
+                if let Some((_, first)) = &environment {
+                    return Err(Error::scene(
+                        &desc.file,
+                        path.clone(),
+                        format!("a scene has at most one environment light, and {first} is one"),
+                    ));
+                }
+                environment = Some((lights.len(), path.clone()));
+                make_environment(sky, *scale, *rotation, &bounds, &desc.file, path)?
+            }
+            _ => make_light(l, &bounds),
+        };
+        lights.push(light);
     }
     if lights.iter().all(|l| l.power() <= 0.0) {
         report
@@ -132,6 +157,7 @@ pub fn build_limited(
         name: desc.name.clone(),
         file: desc.file.clone(),
         light_selector: LightSelector::new(&lights),
+        environment: environment.map(|(index, _)| index),
         lights,
         bvh: geometry.bvh,
         bounds,
@@ -226,5 +252,33 @@ fn make_light(l: &LightDesc, bounds: &Aabb) -> Light {
             scene_center: bounds.bounding_sphere().0,
             scene_radius: bounds.bounding_sphere().1,
         }),
+        LightDesc::Environment { .. } => unreachable!("built by make_environment"),
     }
+}
+
+/// The environment light, with its image read and its sampling density built.
+fn make_environment(
+    sky: &SkyDesc,
+    scale: f32,
+    rotation: glam::Mat3,
+    bounds: &Aabb,
+    file: &Path,
+    path: &str,
+) -> Result<Light> {
+    let (center, radius) = bounds.bounding_sphere();
+    // A scene without triangles still needs a disk that light paths can leave from.
+    let radius = radius.max(1e-3);
+    Ok(Light::Environment(match sky {
+        SkyDesc::Constant(radiance) => {
+            EnvironmentLight::constant(*radiance * scale, center, radius)
+        }
+        SkyDesc::Image(image) => {
+            let key = format!("{path}.file");
+            let image = read_texture(image).map_err(|e| Error::scene(file, key.clone(), e))?;
+            let map =
+                EnvironmentMap::new(image.width as usize, image.height as usize, image.pixels)
+                    .map_err(|e| Error::scene(file, key, e))?;
+            EnvironmentLight::from_map(Arc::new(map), scale, rotation, center, radius)
+        }
+    }))
 }

@@ -14,7 +14,7 @@ pub use build::{build, build_limited, load, Emitter, Geometry, MtlRecord};
 use crate::bvh::{Hit, WideBvh};
 use crate::geometry::SurfacePoint;
 use crate::geometry::{Aabb, Ray, Triangle};
-use crate::light::{Light, LightSelector};
+use crate::light::{EnvironmentLight, Light, LightSelector};
 use crate::material::Material;
 use crate::pod_array::PodArray;
 use glam::{Vec2, Vec3};
@@ -78,6 +78,8 @@ pub struct Scene {
     /// Chooses a light, in proportion to its power, for light sampling and for
     /// starting light paths.
     pub light_selector: LightSelector,
+    /// Index in `lights` of the environment light, if the scene has one.
+    pub environment: Option<usize>,
     /// The BVH over `triangles`.
     pub bvh: WideBvh,
     /// Box around every triangle.
@@ -95,6 +97,16 @@ impl Scene {
     /// Whether anything lies on the ray within (`tmin`, `tmax`): for shadow rays.
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.bvh.occluded(ray)
+    }
+
+    /// The environment light and its index in `lights`, if there is one.
+    #[inline]
+    pub fn environment(&self) -> Option<(usize, &EnvironmentLight)> {
+        let index = self.environment?;
+        match &self.lights[index] {
+            Light::Environment(e) => Some((index, e)),
+            _ => None,
+        }
     }
 
     /// Position, normals and UV at a hit.

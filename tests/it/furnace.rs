@@ -93,3 +93,33 @@ fn emissive_furnace_sees_radiance_two() {
         check(EMISSIVE_FURNACE, integrator, spp(integrator), 2.0, 0.0);
     }
 }
+
+/// A white diffuse sphere (albedo 1) and a perfect mirror sphere under a
+/// constant white sky: radiance 1 leaves every point in every direction,
+/// so every pixel, sky or sphere, is 1. Exercises escaped rays, sky
+/// sampling and their MIS weights, and light paths that start from the
+/// sky's disk. The spheres' smooth normals lose a little light into the
+/// facets (directions below a facet that the shading normal allows).
+const SKY_FURNACE: &str = r#"{
+  "format": 2,
+  "camera": {"position": [0, 0.3, -4], "look_at": [0, 0, 0], "fov": 50},
+  "film": {"width": 16, "height": 16},
+  "render": {"max_depth": 64},
+  "materials": {"white": {"type": "diffuse", "albedo": [1, 1, 1]}, "mirror": {"type": "mirror"}},
+  "objects": [
+    {"type": "sphere", "center": [-0.6, 0, 0], "radius": 0.7, "subdivisions": 5, "material": "white"},
+    {"type": "sphere", "center": [0.8, 0.2, 0.6], "radius": 0.6, "subdivisions": 5, "material": "mirror"}
+  ],
+  "lights": [{"type": "environment", "radiance": [1, 1, 1]}]
+}"#;
+
+#[test]
+fn constant_sky_furnace_sees_radiance_one() {
+    let _guard = common::heavy();
+    check(SKY_FURNACE, IntegratorKind::Pt, 64, 1.0, 0.002);
+    check(SKY_FURNACE, IntegratorKind::Bdpt, 64, 1.0, 0.002);
+    // A light path cannot reach the camera by way of a perfect mirror, so
+    // the light tracer sees the diffuse sphere alone.
+    let diffuse_only = SKY_FURNACE.replace(r#""material": "mirror""#, r#""material": "white""#);
+    check(&diffuse_only, IntegratorKind::Lt, 1024, 1.0, 0.002);
+}

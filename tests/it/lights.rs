@@ -6,14 +6,18 @@
 //! against the closed forms I/d², the spot's falloff, and E. Starting light
 //! paths (`sample_emission`) is tested the same way: each light's emitted
 //! directions (and the area and directional lights' origins) against the
-//! densities they report.
+//! densities they report. The environment's directions, for light
+//! sampling and for light paths, are checked the same way.
 
 use crate::common::chi_square::{self, PlaneGrid, SphereGrid};
 use glam::{DVec3, Vec2, Vec3};
 use std::f64::consts::PI;
+use std::sync::Arc;
 use tracer::color::Rgb;
 use tracer::geometry::{Frame, Triangle};
-use tracer::light::{AreaLight, DirectionalLight, Light, PointLight, SpotLight};
+use tracer::light::{
+    AreaLight, DirectionalLight, EnvironmentLight, EnvironmentMap, Light, PointLight, SpotLight,
+};
 
 const N: usize = 200_000;
 
@@ -470,5 +474,89 @@ fn a_directional_light_emits_from_a_uniform_disk_covering_the_scene() {
                 0.0
             }
         },
+    );
+}
+
+// ---------------------------------------------------------------------------
+// The environment.
+
+/// A small sky with a gradient, a bright sun and a black patch, turned off
+/// every axis.
+fn sky() -> EnvironmentLight {
+    let (w, h) = (32, 16);
+    let texels = (0..w * h)
+        .map(|k| {
+            let (x, y) = ((k % w) as f32, (k / w) as f32);
+            if (4.0..10.0).contains(&x) && y > 11.0 {
+                Rgb::ZERO
+            } else if (x, y) == (20.0, 4.0) {
+                Rgb::new(300.0, 280.0, 250.0)
+            } else {
+                Rgb::new(0.3 + x / 32.0, 0.6, 1.2 - y / 16.0)
+            }
+        })
+        .collect();
+    let map = EnvironmentMap::new(w, h, texels).unwrap();
+    let rotation = glam::Mat3::from_axis_angle(Vec3::new(0.3, 1.0, -0.2).normalize(), 1.1);
+    EnvironmentLight::from_map(Arc::new(map), 1.5, rotation, Vec3::ZERO, 2.0)
+}
+
+/// Directions towards an image sky follow the density the light reports
+/// (luminance × solid angle, cell by cell), over a grid finer than the map's.
+#[test]
+fn an_image_sky_is_sampled_by_its_luminance() {
+    let environment = sky();
+    let light = Light::Environment(environment.clone());
+    let receiver = Vec3::new(0.3, -0.2, 1.0);
+    chi_square::check(
+        "image sky sampling",
+        &SphereGrid {
+            z: (-1.0, 1.0),
+            z_bins: 24,
+            phi_bins: 48,
+        },
+        N,
+        61,
+        |r| {
+            let s = light.sample_incident(receiver, (r.f32(), r.f32()))?;
+            assert!(!s.delta && s.distance.is_infinite());
+            let want = environment.radiance(s.wi);
+            assert!((s.value - want).abs().max_element() <= 1e-4 * want.max_element());
+            Some((s.wi, s.pdf as f64))
+        },
+        |w| environment.pdf_direction(w) as f64,
+    );
+}
+
+/// Light paths from the sky leave from a disk across the scene's bounding
+/// sphere, perpendicular to their direction, with directions drawn as
+/// light sampling draws them (the density reported is direction × position).
+#[test]
+fn an_image_sky_emits_from_a_disk_across_the_scene() {
+    let environment = sky();
+    let light = Light::Environment(environment.clone());
+    let disk_area = PI * 2.0 * 2.0;
+    chi_square::check(
+        "image sky emission",
+        &SphereGrid {
+            z: (-1.0, 1.0),
+            z_bins: 24,
+            phi_bins: 48,
+        },
+        N,
+        62,
+        |r| {
+            let e = light.sample_emission((r.f32(), r.f32()), (r.f32(), r.f32()))?;
+            let to_sky = -e.dir;
+            // On the plane tangent to the sphere of radius 2, within the disk.
+            assert!((e.origin.dot(to_sky) - 2.0).abs() < 1e-4);
+            assert!((e.origin - to_sky * 2.0).length() <= 2.0 + 1e-4);
+            assert!(
+                (e.direct_pdf_area - environment.pdf_direction(to_sky)).abs()
+                    <= 1e-4 * e.direct_pdf_area
+            );
+            Some((to_sky, e.emission_pdf as f64 * disk_area))
+        },
+        |w| environment.pdf_direction(w) as f64,
     );
 }

@@ -380,6 +380,14 @@ fn an_unknown_type_is_named() {
     refused(&scene, "plastic.json", &["materials.white.type", "plastic"]);
 
     let mut scene = base_scene();
+    scene["lights"][0]["type"] = json!("sky");
+    refused(
+        &scene,
+        "sky.json",
+        &["lights[0].type", "sky", "environment"],
+    );
+
+    let mut scene = base_scene();
     scene["lights"][0]["type"] = json!("area");
     refused(&scene, "area.json", &["lights[0].type", "area"]);
 
@@ -458,6 +466,69 @@ fn version_two_keys_are_read_and_checked() {
         &bad,
         "ior.json",
         &["materials.frosted.ior", "greater than zero"],
+    );
+}
+
+/// The environment light: a constant sky or an image, one per scene,
+/// turned but never moved or scaled; its image must load.
+#[test]
+fn environment_keys_are_read_and_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let sky = dir.path().join("sky.png");
+    image::RgbImage::from_fn(8, 4, |x, y| image::Rgb([30 * x as u8, 60 * y as u8, 200]))
+        .save(&sky)
+        .unwrap();
+    let mut scene = base_scene();
+    scene["format"] = json!(2);
+    scene["lights"][0] = json!({"type": "environment", "file": "sky.png", "scale": 2,
+                                "transform": {"rotate": [0, 1, 0, 30]}});
+    let path = common::write_json(dir.path(), "env.json", &scene);
+    let (loaded, _) = tracer::scene::load(&path).unwrap();
+    assert!(loaded.environment().is_some());
+
+    let mut constant = scene.clone();
+    constant["lights"][0] = json!({"type": "environment", "radiance": [0.5, 0.6, 0.7]});
+    let path = common::write_json(dir.path(), "constant.json", &constant);
+    tracer::scene::load(&path).unwrap();
+
+    let refused_here = |scene: &Value, name: &str, parts: &[&str]| {
+        let path = common::write_json(dir.path(), name, scene);
+        common::refused(&path, parts)
+    };
+    let mut bad = scene.clone();
+    bad["lights"][0]["radiance"] = json!([1, 1, 1]);
+    refused_here(&bad, "both.json", &["lights[0]", "not both"]);
+    let mut bad = scene.clone();
+    bad["lights"][0] = json!({"type": "environment"});
+    refused_here(&bad, "neither.json", &["lights[0]", "radiance, file"]);
+    let mut bad = scene.clone();
+    bad["lights"][0]["file"] = json!("missing.exr");
+    refused_here(&bad, "missing.json", &["lights[0].file", "missing.exr"]);
+    write(&dir.path().join("garbage.png"), "not a png");
+    let mut bad = scene.clone();
+    bad["lights"][0]["file"] = json!("garbage.png");
+    refused_here(&bad, "garbage.json", &["lights[0].file", "garbage.png"]);
+    let mut bad = scene.clone();
+    bad["lights"][0]["scale"] = json!(-1);
+    refused_here(&bad, "scale.json", &["lights[0].scale", "zero or greater"]);
+    for (name, transform) in [
+        ("moved.json", json!({"translate": [0, 1, 0]})),
+        ("scaled.json", json!({"scale": 2})),
+        ("mirrored.json", json!({"scale": [1, 1, -1]})),
+    ] {
+        let mut bad = scene.clone();
+        bad["lights"][0]["transform"] = transform;
+        refused_here(&bad, name, &["lights[0].transform", "rotation only"]);
+    }
+    let mut bad = scene.clone();
+    bad["lights"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"type": "environment", "radiance": [1, 1, 1]}));
+    refused_here(
+        &bad,
+        "two.json",
+        &["lights[1]", "at most one environment", "lights[0]"],
     );
 }
 
