@@ -34,6 +34,9 @@ Conversions (tracer -> Mitsuba 3):
 - `rough_dielectric` (format 2) -> `roughdielectric` with `distribution:
   ggx`, `alpha`, `int_ior`, `ext_ior` 1, `specular_transmittance`; `alpha`
   0 -> `dielectric`.
+- `plastic` (format 2) -> `twosided(roughplastic)` with `distribution:
+  ggx`, `alpha`, `int_ior` = ior, `ext_ior` 1, `diffuse_reflectance` =
+  albedo, `nonlinear` false; `alpha` 0 -> `twosided(plastic)`.
 - objects `triangles`, `quad`, `cube`, `sphere` (tracer's icosphere, vertex
   for vertex) with their `transform` -> `mi.Mesh`; zero-area triangles are
   dropped as tracer drops them; vertex normals are carried by the inverse
@@ -44,7 +47,9 @@ Conversions (tracer -> Mitsuba 3):
   normal, which for a mesh without vertex normals is
   cross(p1 - p0, p2 - p0), the same side).
 - lights `point` -> `point` (`intensity`), `directional` -> `directional`
-  (`irradiance`, `direction`).
+  (`irradiance`, `direction`), `environment` (format 2) -> `constant`
+  (`radiance` x `scale`) or `envmap` (`filename`, `scale`, `to_world` =
+  the rotation): Mitsuba's envmap is the mapping tracer's is defined by.
 - `render.max_depth` -> `max_depth`: both count path segments (1: emitters
   seen directly, 2: direct lighting).
 
@@ -52,8 +57,7 @@ Refused: `mesh` (OBJ) objects, textures, `two_sided` emitters (Mitsuba 3's
 area light is one-sided), emitters with vertex normals (Mitsuba emits on the
 side of the interpolated normal, tracer of the geometric one), `spot` lights
 (different falloff curves), `.trs` files, format versions other than 1 and 2,
-`plastic`, `environment` lights, and
-any key this converter does not know.
+and any key this converter does not know.
 
 Usage as a module (a Mitsuba variant must be set first):
 
@@ -296,6 +300,22 @@ def bsdf_dict(mat, key):
         else:
             out.update({"type": "roughdielectric", "distribution": "ggx", "alpha": alpha})
         return out
+    if kind == "plastic":
+        _keys(mat, key, {"type", "albedo", "ior", "alpha"})
+        albedo = mat.get("albedo", [0.5, 0.5, 0.5])
+        if isinstance(albedo, dict):
+            _fail(f"{key}.albedo", "textures are not converted")
+        ior = float(mat.get("ior", 1.5))
+        if not ior > 0:
+            _fail(f"{key}.ior", "expected > 0")
+        alpha = float(mat.get("alpha", 0.1))
+        inner = {"int_ior": ior, "ext_ior": 1.0, "nonlinear": False,
+                 "diffuse_reflectance": _rgb(_color(albedo, f"{key}.albedo"))}
+        if alpha <= SMOOTH_ALPHA:
+            inner["type"] = "plastic"
+        else:
+            inner.update({"type": "roughplastic", "distribution": "ggx", "alpha": alpha})
+        return {"type": "twosided", "bsdf": inner}
     _fail(f"{key}.type", f"material type {kind!r} is not converted")
 
 
@@ -479,6 +499,8 @@ def convert(scene, *, integrator="path", sampler="independent", spp=None,
     """A dict for `mi.load_dict`: the scene, its camera, film and sampler, and
     the integrator (`path` or `ptracer`). Unset arguments take the scene's
     values (tracer's defaults where the scene gives none)."""
+    folder = (os.path.dirname(os.path.abspath(scene))
+              if isinstance(scene, (str, os.PathLike)) else os.getcwd())
     scene = load(scene)
     _keys(scene, "", {"format", "name", "camera", "film", "render", "materials",
                       "objects", "lights"})
@@ -578,9 +600,24 @@ def convert(scene, *, integrator="path", sampler="independent", spp=None,
                 "type": "directional",
                 "direction": [float(x) for x in d / np.linalg.norm(d)],
                 "irradiance": _rgb(_color(light["irradiance"], f"{key}.irradiance"))}
+        elif kind == "environment":
+            _keys(light, key, {"type", "radiance", "file", "scale", "transform"})
+            scale = float(light.get("scale", 1.0))
+            if ("radiance" in light) == ("file" in light):
+                _fail(key, "give exactly one of radiance and file")
+            if "radiance" in light:
+                radiance = [x * scale for x in _color(light["radiance"], f"{key}.radiance")]
+                out[f"light_{i:03d}"] = {"type": "constant", "radiance": _rgb(radiance)}
+            else:
+                m = transform_matrix(light.get("transform"), f"{key}.transform")
+                out[f"light_{i:03d}"] = {
+                    "type": "envmap",
+                    "filename": os.path.join(folder, light["file"]),
+                    "scale": scale,
+                    "to_world": mi.ScalarTransform4f(m.tolist())}
         else:
             _fail(f"{key}.type", f"light type {kind!r} is not converted "
-                  "(point and directional are; spot falloffs differ)")
+                  "(point, directional and environment are; spot falloffs differ)")
     return out
 
 

@@ -247,6 +247,15 @@ pub enum MaterialDesc {
         /// Per-channel factor on refracted light, in [0, 1] (JSON default: 1).
         transmittance: Rgb,
     },
+    /// A diffuse base under a dielectric coat (format 2).
+    Plastic {
+        /// The base's albedo (JSON default: 0.5 grey).
+        albedo: AlbedoDesc,
+        /// Index of refraction of the coat; > 0 (JSON default: 1.5).
+        ior: f32,
+        /// GGX width of the coat, ≥ 0 (JSON default: 0.1); 0 is a smooth coat.
+        alpha: f32,
+    },
 }
 
 /// How T-racer's "Mesh Material" rewrites every MTL material of a mesh,

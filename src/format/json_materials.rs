@@ -53,6 +53,16 @@ impl Ctx<'_> {
             #[serde(default)]
             transmittance: Option<Reflectance>,
         }
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Plastic {
+            #[serde(default)]
+            albedo: Option<Value>,
+            #[serde(default)]
+            ior: Option<Positive>,
+            #[serde(default)]
+            alpha: Option<NonNegative>,
+        }
         let (kind, map) = self.tagged(
             value,
             path,
@@ -62,6 +72,7 @@ impl Ctx<'_> {
                 "dielectric",
                 "conductor",
                 "rough_dielectric",
+                "plastic",
             ],
         )?;
         let map = Value::Object(map);
@@ -104,6 +115,18 @@ impl Ctx<'_> {
                     alpha: c.alpha.map_or(0.1, |a| a.0),
                     ior,
                     reflectance: c.reflectance.map_or(Vec3::ONE, |r| r.0),
+                }
+            }
+            "plastic" => {
+                let p: Plastic = self.typed(map, path)?;
+                let albedo = match p.albedo {
+                    None => AlbedoDesc::Constant(glam::Vec3::splat(0.5)),
+                    Some(v) => self.albedo(v, &format!("{path}.albedo"))?,
+                };
+                MaterialDesc::Plastic {
+                    albedo,
+                    ior: p.ior.map_or(1.5, |x| x.0),
+                    alpha: p.alpha.map_or(0.1, |a| a.0),
                 }
             }
             _ => {

@@ -10,11 +10,13 @@ mod dielectric;
 mod diffuse;
 pub mod microfacet;
 mod mirror;
+pub mod plastic;
 mod rough_dielectric;
 pub mod texture;
 
 pub use conductor::{fresnel_conductor, Conductor};
 pub use dielectric::fresnel_dielectric;
+pub use plastic::Plastic;
 pub use rough_dielectric::RoughDielectric;
 pub use texture::Texture;
 
@@ -30,6 +32,26 @@ pub enum Albedo {
     Constant(Rgb),
     /// An image looked up at the surface point's UV (shared between materials).
     Texture(Arc<Texture>),
+}
+
+impl Albedo {
+    /// The reflectance at `surface` (its texture looked up at its UV).
+    #[inline]
+    pub fn at(&self, surface: &SurfacePoint) -> Rgb {
+        match self {
+            Albedo::Constant(c) => *c,
+            Albedo::Texture(t) => t.lookup(surface.uv),
+        }
+    }
+
+    /// The mean reflectance over the surface, averaged over RGB (over the
+    /// whole image for a texture).
+    pub fn mean(&self) -> f32 {
+        match self {
+            Albedo::Constant(c) => crate::color::average(*c),
+            Albedo::Texture(t) => crate::color::average(t.mean()),
+        }
+    }
 }
 
 /// A surface's material, as the scene names it. Indexed by
@@ -78,6 +100,20 @@ pub enum Material {
         /// Per-channel factor on light each time it refracts.
         transmittance: Rgb,
     },
+    /// A diffuse base under a smooth or GGX-rough dielectric coat, from
+    /// both faces (Mitsuba 3's `plastic` and `roughplastic`).
+    Plastic {
+        /// Reflectance of the base.
+        albedo: Albedo,
+        /// Index of refraction of the coat; > 0.
+        ior: f32,
+        /// GGX width of the coat; 0 is smooth.
+        alpha: f32,
+        /// The coat's share in choosing a lobe, from the mean albedo.
+        specular_weight: f32,
+        /// The rough coat's transmittance tables; `None` when smooth.
+        tables: Option<&'static plastic::CoatTables>,
+    },
 }
 
 /// Which quantity a path carries. Radiance (camera paths) and importance (light
@@ -115,6 +151,8 @@ pub enum BsdfKind {
     Conductor(Conductor),
     /// GGX reflection and refraction.
     RoughDielectric(RoughDielectric),
+    /// A diffuse base under a dielectric coat.
+    Plastic(Plastic),
 }
 
 /// A BSDF at one surface point, oriented to the side its outgoing direction is on.
@@ -143,6 +181,19 @@ pub struct BsdfSample {
 }
 
 impl Material {
+    /// A plastic of base `albedo` under a coat of index `ior` and GGX width
+    /// `alpha` (0: smooth), with its lobe weights and, for a rough coat,
+    /// its tables (computed once per width and index).
+    pub fn plastic(albedo: Albedo, ior: f32, alpha: f32) -> Material {
+        Material::Plastic {
+            specular_weight: plastic::specular_weight(albedo.mean()),
+            albedo,
+            ior,
+            alpha,
+            tables: plastic::is_rough(alpha).then(|| plastic::coat_tables(alpha, ior)),
+        }
+    }
+
     /// The BSDF for light leaving `surface` towards `wo` (a unit vector).
     pub fn bsdf(&self, surface: &SurfacePoint, wo: Vec3) -> Bsdf {
         let outside = wo.dot(surface.geometric_normal) >= 0.0;
@@ -162,10 +213,7 @@ impl Material {
         }
         let kind = match self {
             Material::Diffuse { albedo } => BsdfKind::Diffuse {
-                albedo: match albedo {
-                    Albedo::Constant(c) => *c,
-                    Albedo::Texture(t) => t.lookup(surface.uv),
-                },
+                albedo: albedo.at(surface),
             },
             Material::Mirror { reflectance } => BsdfKind::Mirror {
                 reflectance: *reflectance,
@@ -194,6 +242,19 @@ impl Material {
                 eta: if outside { *ior } else { 1.0 / *ior },
                 transmittance: *transmittance,
             }),
+            Material::Plastic {
+                albedo,
+                ior,
+                alpha,
+                specular_weight,
+                tables,
+            } => BsdfKind::Plastic(Plastic {
+                alpha: *alpha,
+                eta: *ior,
+                albedo: albedo.at(surface),
+                specular_weight: *specular_weight,
+                tables: *tables,
+            }),
         };
         Bsdf {
             kind,
@@ -206,7 +267,7 @@ impl Material {
     /// so light sampling cannot connect to it.
     pub fn is_delta(&self) -> bool {
         match self {
-            Material::Diffuse { .. } => false,
+            Material::Diffuse { .. } | Material::Plastic { .. } => false,
             Material::Mirror { .. } | Material::Dielectric { .. } => true,
             Material::Conductor { alpha, .. } | Material::RoughDielectric { alpha, .. } => {
                 *alpha <= microfacet::SMOOTH_ALPHA
@@ -219,7 +280,7 @@ impl Bsdf {
     /// Whether the BSDF has only delta lobes, so `eval` and `pdf` are always zero.
     pub fn is_delta(&self) -> bool {
         match self.kind {
-            BsdfKind::Diffuse { .. } => false,
+            BsdfKind::Diffuse { .. } | BsdfKind::Plastic(_) => false,
             BsdfKind::Mirror { .. } | BsdfKind::Dielectric { .. } => true,
             BsdfKind::Conductor(c) => c.is_smooth(),
             BsdfKind::RoughDielectric(r) => r.is_smooth(),
@@ -254,7 +315,7 @@ impl Bsdf {
             BsdfKind::Diffuse { albedo } if reflected => {
                 diffuse::eval(*albedo, self.frame.to_local(wi))
             }
-            BsdfKind::Conductor(_) | BsdfKind::RoughDielectric(_) => {
+            BsdfKind::Conductor(_) | BsdfKind::RoughDielectric(_) | BsdfKind::Plastic(_) => {
                 self.eval_microfacet(wo, wi, reflected, mode)
             }
             _ => Rgb::ZERO,
@@ -269,6 +330,7 @@ impl Bsdf {
         match &self.kind {
             BsdfKind::Conductor(c) if reflected => c.eval(wo, wi_local),
             BsdfKind::RoughDielectric(r) => r.eval(wo, wi_local, mode),
+            BsdfKind::Plastic(p) if reflected => p.eval(wo, wi_local),
             _ => Rgb::ZERO,
         }
     }
@@ -279,6 +341,7 @@ impl Bsdf {
         match &self.kind {
             BsdfKind::Conductor(c) if reflected => (c.pdf(wo, wi_local), c.pdf(wi_local, wo)),
             BsdfKind::RoughDielectric(r) => (r.pdf(wo, wi_local), r.reverse_pdf(wo, wi_local)),
+            BsdfKind::Plastic(p) if reflected => (p.pdf(wo, wi_local), p.pdf(wi_local, wo)),
             _ => (0.0, 0.0),
         }
     }
@@ -300,7 +363,7 @@ impl Bsdf {
                 diffuse::pdf(self.frame.to_local(wi)),
                 diffuse::pdf(self.frame.to_local(wo)),
             ),
-            BsdfKind::Conductor(_) | BsdfKind::RoughDielectric(_) => {
+            BsdfKind::Conductor(_) | BsdfKind::RoughDielectric(_) | BsdfKind::Plastic(_) => {
                 self.microfacet_pdfs(wo, wi, reflected)
             }
             _ => (0.0, 0.0),
@@ -348,6 +411,7 @@ impl Bsdf {
             }
             BsdfKind::Conductor(ref c) => c.sample(wo_local, u)?,
             BsdfKind::RoughDielectric(ref r) => r.sample(wo_local, u, u_lobe, mode)?,
+            BsdfKind::Plastic(ref p) => p.sample(wo_local, u, u_lobe)?,
         };
         let wi = self.frame.to_world(wi_local);
         // Shading normals can send a "reflected" direction through the surface

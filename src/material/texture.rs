@@ -29,6 +29,15 @@ impl Texture {
         (self.width, self.height)
     }
 
+    /// The mean texel.
+    pub fn mean(&self) -> Rgb {
+        let sum = self
+            .texels
+            .iter()
+            .fold(glam::DVec3::ZERO, |acc, t| acc + t.as_dvec3());
+        (sum / self.texels.len() as f64).as_vec3()
+    }
+
     fn texel(&self, x: i64, y: i64) -> Rgb {
         let x = x.rem_euclid(self.width as i64) as usize;
         let y = y.rem_euclid(self.height as i64) as usize;

@@ -83,6 +83,23 @@ impl<'a> Builder<'a> {
         Ok(t)
     }
 
+    /// A diffuse or plastic material's albedo, its texture loaded (see [`Builder::material`]).
+    fn albedo(&mut self, albedo: &AlbedoDesc, path: &str, fallback: Option<Rgb>) -> Result<Albedo> {
+        Ok(match albedo {
+            AlbedoDesc::Constant(c) => Albedo::Constant(*c),
+            AlbedoDesc::Texture(t) => match (self.texture(t), fallback) {
+                (Ok(t), _) => Albedo::Texture(t),
+                (Err(e), Some(kd)) => {
+                    self.report
+                        .warnings
+                        .push(format!("{path}: {e}; using Kd instead"));
+                    Albedo::Constant(kd)
+                }
+                (Err(e), None) => return Err(Error::scene(self.file, format!("{path}.albedo"), e)),
+            },
+        })
+    }
+
     /// Builds a material. For MTL materials, `fallback` is the `Kd` to use
     /// (with a warning) when `map_Kd` cannot be read; a texture named in the
     /// scene file itself must load.
@@ -94,22 +111,11 @@ impl<'a> Builder<'a> {
     ) -> Result<Material> {
         Ok(match m {
             MaterialDesc::Diffuse { albedo } => Material::Diffuse {
-                albedo: match albedo {
-                    AlbedoDesc::Constant(c) => Albedo::Constant(*c),
-                    AlbedoDesc::Texture(t) => match (self.texture(t), fallback) {
-                        (Ok(t), _) => Albedo::Texture(t),
-                        (Err(e), Some(kd)) => {
-                            self.report
-                                .warnings
-                                .push(format!("{path}: {e}; using Kd instead"));
-                            Albedo::Constant(kd)
-                        }
-                        (Err(e), None) => {
-                            return Err(Error::scene(self.file, format!("{path}.albedo"), e))
-                        }
-                    },
-                },
+                albedo: self.albedo(albedo, path, fallback)?,
             },
+            MaterialDesc::Plastic { albedo, ior, alpha } => {
+                Material::plastic(self.albedo(albedo, path, fallback)?, *ior, *alpha)
+            }
             MaterialDesc::Mirror { reflectance } => Material::Mirror {
                 reflectance: *reflectance,
             },

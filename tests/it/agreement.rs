@@ -189,7 +189,7 @@ fn write_sky(path: &std::path::Path) {
 /// An open scene under an image sky with a sun, seen through a thin lens:
 /// escaped camera rays and their MIS weights (PT, BDPT), light paths from
 /// the sky's disk (LT, BDPT), the sky seen directly by light tracing, and
-/// every material of format 2.
+/// every material of format 2 (rough plastic among them; then a smooth one).
 #[test]
 fn image_sky_with_rough_materials_and_thin_lens() {
     let dir = tempfile::tempdir().unwrap();
@@ -202,17 +202,27 @@ fn image_sky_with_rough_materials_and_thin_lens() {
       "materials": {
         "white": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]},
         "gold": {"type": "conductor", "alpha": 0.3, "eta": [0.18, 0.42, 1.37], "k": [3.42, 2.35, 1.77]},
-        "frosted": {"type": "rough_dielectric", "ior": 1.5, "alpha": 0.25}
+        "frosted": {"type": "rough_dielectric", "ior": 1.5, "alpha": 0.25},
+        "plastic": {"type": "plastic", "albedo": [0.2, 0.5, 0.8], "ior": 1.5, "alpha": 0.2}
       },
       "objects": [
         {"type": "quad", "material": "white", "transform": {"scale": 6}},
         {"type": "sphere", "center": [-0.6, 0.5, 0.2], "radius": 0.5, "subdivisions": 2, "material": "gold"},
         {"type": "sphere", "center": [0.7, 0.45, 0.3], "radius": 0.45, "subdivisions": 2, "material": "frosted"},
-        {"type": "cube", "material": "white", "transform": {"scale": 0.4, "rotate": [0, 1, 0, 30], "translate": [0.1, 0.2, -0.8]}}
+        {"type": "cube", "material": "plastic", "transform": {"scale": 0.4, "rotate": [0, 1, 0, 30], "translate": [0.1, 0.2, -0.8]}}
       ],
       "lights": [{"type": "environment", "file": "sky.exr", "transform": {"rotate": [0, 1, 0, 40]}}]
     }"#;
     let path = write_scene(dir.path(), "sky.json", json);
     // Most rays escape after a bounce or two, so samples are cheap: take more.
     all_three_agree(&path, 32, [64, 64, 32]);
+    // A smooth coat mirrors the sky, which light paths cannot bring to the
+    // camera: PT and BDPT only.
+    let smooth = json.replace(r#""alpha": 0.2}"#, r#""alpha": 0}"#);
+    assert_ne!(smooth, json);
+    let path = write_scene(dir.path(), "smooth.json", &smooth);
+    let _guard = common::heavy();
+    let pt = stats(&path, IntegratorKind::Pt, 32, 64);
+    let bdpt = stats(&path, IntegratorKind::Bdpt, 32, 32);
+    assert_agree(&pt, &bdpt, Z, "smooth plastic: pt vs bdpt");
 }

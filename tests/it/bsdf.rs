@@ -190,6 +190,10 @@ fn rough_glass(alpha: f32) -> Material {
     }
 }
 
+fn plastic(alpha: f32) -> Material {
+    Material::plastic(Albedo::Constant(Rgb::new(0.7, 0.4, 0.2)), 1.5, alpha)
+}
+
 /// Several widths, from normal to grazing incidence, with the shading
 /// normal equal to the geometric one and tilted.
 fn microfacet_cases() -> Vec<(f32, Vec3, Vec3)> {
@@ -239,6 +243,72 @@ fn rough_dielectric_sampling_matches_pdf() {
     }
 }
 
+/// Rough plastic from both faces: the coat's GGX lobe and the base's
+/// cosine lobe, mixed by the coat's transmittance towards `wo`.
+#[test]
+fn plastic_sampling_matches_pdf() {
+    for (i, (alpha, wo, ns)) in microfacet_cases().into_iter().enumerate() {
+        for side in [1.0, -1.0] {
+            // The same direction on the back face: the BSDF turns to face it.
+            let wo = (wo * Vec3::new(1.0, 1.0, side)).normalize();
+            let bsdf = plastic(alpha).bsdf(&surface(Vec3::Z, ns), wo);
+            assert!(!bsdf.is_delta());
+            check_sampling_matches_pdf(
+                &format!("plastic alpha {alpha}, wo {wo}, ns {ns}"),
+                &bsdf,
+                wo,
+                300 + 2 * i as u64 + (side < 0.0) as u64,
+            );
+        }
+    }
+}
+
+/// A smooth coat: its mirror lobe is chosen with the probability the
+/// sample reports (binomial test) and carries F / p; the other samples
+/// follow the base's density, which integrates to the rest.
+#[test]
+fn smooth_plastic_mixes_a_mirror_and_the_base() {
+    let material = plastic(0.0);
+    for (k, wo) in [Vec3::new(0.1, 0.0, 0.99), Vec3::new(0.9, 0.2, 0.3)]
+        .into_iter()
+        .enumerate()
+    {
+        let wo = wo.normalize();
+        let bsdf = material.bsdf(&surface(Vec3::Z, Vec3::Z), wo);
+        let mut rng = Rng::new(40 + k as u64);
+        let (n, mut mirrored, mut probability) = (100_000, 0, 0.0);
+        for _ in 0..n {
+            let s = bsdf
+                .sample(wo, (rng.f32(), rng.f32()), rng.f32(), Transport::Radiance)
+                .unwrap();
+            if s.delta {
+                mirrored += 1;
+                probability = s.pdf;
+                let fresnel = fresnel_dielectric(wo.z, 1.5);
+                assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-5);
+                assert!((s.weight - Rgb::splat(fresnel / s.pdf)).abs().max_element() < 1e-4);
+            }
+        }
+        let expected = n as f64 * probability as f64;
+        let sd = (expected * (1.0 - probability as f64)).sqrt();
+        assert!(
+            (mirrored as f64 - expected).abs() < 5.0 * sd,
+            "mirror chosen {mirrored} times, expected {expected:.0} ± {sd:.0}"
+        );
+        chi_square::check(
+            &format!("smooth plastic base, wo {wo}"),
+            &SphereGrid::sphere(),
+            200_000,
+            50 + k as u64,
+            |rng| {
+                let s = bsdf.sample(wo, (rng.f32(), rng.f32()), rng.f32(), Transport::Radiance)?;
+                (!s.delta).then_some((s.wi, s.pdf as f64))
+            },
+            |w| bsdf.pdf(wo, w) as f64,
+        );
+    }
+}
+
 /// A narrow lobe needs a fine grid: the cap around the normal, at normal incidence.
 #[test]
 fn narrow_microfacet_lobes_match_their_pdf() {
@@ -278,7 +348,12 @@ fn narrow_microfacet_lobes_match_their_pdf() {
 #[test]
 fn microfacet_adjoint_is_the_swapped_bsdf() {
     let mut rng = Rng::new(11);
-    for material in [conductor(0.4), rough_glass(0.2), rough_glass(0.7)] {
+    for material in [
+        conductor(0.4),
+        rough_glass(0.2),
+        rough_glass(0.7),
+        plastic(0.3),
+    ] {
         for (_, wo, _) in microfacet_cases() {
             for side in [1.0, -1.0] {
                 let wo = (wo * Vec3::new(1.0, 1.0, side)).normalize();

@@ -376,8 +376,12 @@ fn an_unknown_type_is_named() {
     refused(&scene, "cylinder.json", &["objects[0].type", "cylinder"]);
 
     let mut scene = base_scene();
-    scene["materials"]["white"]["type"] = json!("plastic");
-    refused(&scene, "plastic.json", &["materials.white.type", "plastic"]);
+    scene["materials"]["white"]["type"] = json!("vinyl");
+    refused(
+        &scene,
+        "vinyl.json",
+        &["materials.white.type", "vinyl", "plastic"],
+    );
 
     let mut scene = base_scene();
     scene["lights"][0]["type"] = json!("sky");
@@ -416,6 +420,9 @@ fn version_two_keys_are_read_and_checked() {
         json!({"type": "conductor", "alpha": 0.2, "eta": [0.2, 0.9, 1.1], "k": [3.9, 2.4, 2.2]});
     scene["materials"]["frosted"] = json!({"type": "rough_dielectric", "alpha": 0.3});
     scene["materials"]["chrome"] = json!({"type": "conductor"});
+    scene["materials"]["coated"] =
+        json!({"type": "plastic", "albedo": [0.1, 0.2, 0.7], "alpha": 0.2});
+    scene["materials"]["gloss"] = json!({"type": "plastic", "alpha": 0});
     let dir = tempfile::tempdir().unwrap();
     let path = common::write_json(dir.path(), "v2.json", &scene);
     tracer::scene::load(&path).unwrap();
@@ -459,6 +466,23 @@ fn version_two_keys_are_read_and_checked() {
         &bad,
         "roughness.json",
         &["materials.frosted.roughness", "unknown key"],
+    );
+    let mut bad = scene.clone();
+    bad["materials"]["coated"]["albedo"] = json!([0.1, 1.2, 0.7]);
+    refused(&bad, "albedo.json", &["materials.coated.albedo"]);
+    let mut bad = scene.clone();
+    bad["materials"]["coated"]["albedo"] = json!({"texture": "missing.png"});
+    refused(
+        &bad,
+        "texture.json",
+        &["materials.coated.albedo", "missing.png"],
+    );
+    let mut bad = scene.clone();
+    bad["materials"]["gloss"]["roughness"] = json!(0.1);
+    refused(
+        &bad,
+        "gloss.json",
+        &["materials.gloss.roughness", "unknown key"],
     );
     let mut bad = scene;
     bad["materials"]["frosted"]["ior"] = json!(0);

@@ -92,6 +92,16 @@ enum MaterialJson {
         alpha: f32,
         transmittance: [f32; 3],
     },
+    Plastic {
+        albedo: [f32; 3],
+        ior: f32,
+        alpha: f32,
+    },
+    PlasticTexture {
+        texture: PathBuf,
+        ior: f32,
+        alpha: f32,
+    },
 }
 
 impl Meta {
@@ -122,6 +132,12 @@ impl Meta {
                             alpha,
                             transmittance,
                         } => ior.is_finite() && alpha.is_finite() && finite(transmittance),
+                        MaterialJson::Plastic { albedo, ior, alpha } => {
+                            finite(albedo) && ior.is_finite() && alpha.is_finite()
+                        }
+                        MaterialJson::PlasticTexture { ior, alpha, .. } => {
+                            ior.is_finite() && alpha.is_finite()
+                        }
                     }
             })
     }
@@ -177,6 +193,24 @@ impl Meta {
                             alpha: *alpha,
                             transmittance: transmittance.to_array(),
                         },
+                        MaterialDesc::Plastic {
+                            albedo: AlbedoDesc::Constant(c),
+                            ior,
+                            alpha,
+                        } => MaterialJson::Plastic {
+                            albedo: c.to_array(),
+                            ior: *ior,
+                            alpha: *alpha,
+                        },
+                        MaterialDesc::Plastic {
+                            albedo: AlbedoDesc::Texture(t),
+                            ior,
+                            alpha,
+                        } => MaterialJson::PlasticTexture {
+                            texture: t.clone(),
+                            ior: *ior,
+                            alpha: *alpha,
+                        },
                     },
                 })
                 .collect(),
@@ -224,6 +258,20 @@ fn mtl_record(m: MtlJson) -> MtlRecord {
                 ior,
                 alpha,
                 transmittance: Rgb::from_array(transmittance),
+            },
+            MaterialJson::Plastic { albedo, ior, alpha } => MaterialDesc::Plastic {
+                albedo: AlbedoDesc::Constant(Rgb::from_array(albedo)),
+                ior,
+                alpha,
+            },
+            MaterialJson::PlasticTexture {
+                texture,
+                ior,
+                alpha,
+            } => MaterialDesc::Plastic {
+                albedo: AlbedoDesc::Texture(texture),
+                ior,
+                alpha,
             },
         },
     }
