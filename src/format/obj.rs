@@ -2,7 +2,8 @@
 //!
 //! MTL materials map onto ours as the scene format says: `Kd`/`map_Kd` →
 //! diffuse, `Ke` → emission, `illum 3`/`5` → mirror, `illum 7` or `d` < 1
-//! with an `Ni` other than 1 → dielectric. (Exporters such as Blender's write
+//! with an `Ni` other than 1 → dielectric, `Pm`/`Pr` or `illum 2` with
+//! `Ks` and `Ns` → conductor or plastic. (Exporters such as Blender's write
 //! `d 0` with `Ni 1` on opaque materials; a dielectric of index 1 would be
 //! invisible, so that combination stays diffuse.)
 
@@ -167,6 +168,57 @@ fn complete_colours(bytes: Vec<u8>) -> Vec<u8> {
     out.into_bytes()
 }
 
+/// The material of an MTL entry that is neither glass nor a mirror: a
+/// metal or a coated (plastic) surface when its keys say it is glossy,
+/// else diffuse. The PBR extension's `Pm` (metallic, ≥ 0.5: a metal) and
+/// `Pr` (roughness r: GGX alpha = r², the usual convention) come first;
+/// otherwise `illum 2` (highlights on) with a non-black `Ks` and a Phong
+/// exponent `Ns` makes a plastic
+/// of alpha = √(2 / (Ns + 2)), Walter et al.'s (2007) match of a Phong
+/// lobe to a microfacet one. A metal's colour is `Kd` (the PBR base
+/// colour) with Fresnel 1; a plastic's coat takes `Ni` when it is above 1.
+fn glossy_material(
+    m: &tobj::Material,
+    albedo: AlbedoDesc,
+    kd: Rgb,
+    ni: Option<f32>,
+) -> MaterialDesc {
+    let param = |key: &str| {
+        m.unknown_param
+            .get(key)
+            .and_then(|v| v.trim().parse::<f32>().ok())
+            .filter(|v| v.is_finite())
+    };
+    let coat_ior = ni.filter(|&n| n > 1.0).unwrap_or(1.5);
+    let roughness = param("Pr").map(|r| r.clamp(0.0, 1.0));
+    let metallic = param("Pm").map(|p| p.clamp(0.0, 1.0));
+    if metallic.is_some_and(|p| p >= 0.5) {
+        let r = roughness.unwrap_or(0.5);
+        return MaterialDesc::Conductor {
+            alpha: r * r,
+            ior: None,
+            reflectance: kd,
+        };
+    }
+    if let Some(r) = roughness {
+        return MaterialDesc::Plastic {
+            albedo,
+            ior: coat_ior,
+            alpha: r * r,
+        };
+    }
+    let ks = m.specular.map(Rgb::from).unwrap_or(Rgb::ZERO);
+    let highlights = m.illumination_model == Some(2);
+    match m.shininess.filter(|n| n.is_finite() && *n >= 0.0) {
+        Some(ns) if highlights && ks.max_element() > 0.0 => MaterialDesc::Plastic {
+            albedo,
+            ior: coat_ior,
+            alpha: (2.0 / (ns + 2.0)).sqrt(),
+        },
+        _ => MaterialDesc::Diffuse { albedo },
+    }
+}
+
 fn convert_material(
     m: &tobj::Material,
     folder: &Path,
@@ -214,7 +266,7 @@ fn convert_material(
                     }
                     _ => AlbedoDesc::Constant(kd_clamped),
                 };
-                MaterialDesc::Diffuse { albedo }
+                glossy_material(m, albedo, kd_clamped, ni)
             }
         }
     };

@@ -61,6 +61,26 @@ fn textured_scene() {
     );
 }
 
+#[test]
+fn rough_materials_scene() {
+    all_three_agree(
+        &common::repo().join("scenes/rough-materials.json"),
+        32,
+        [16, 16, 8],
+    );
+}
+
+/// The sky scene's smooth plastic, chrome and glass are seen directly,
+/// which a light tracer cannot render; PT and BDPT must still agree.
+#[test]
+fn sky_materials_pt_and_bdpt() {
+    let _guard = common::heavy();
+    let path = common::repo().join("scenes/sky-materials.json");
+    let pt = stats(&path, IntegratorKind::Pt, 32, 32);
+    let bdpt = stats(&path, IntegratorKind::Bdpt, 32, 16);
+    assert_agree(&pt, &bdpt, Z, "sky-materials: pt vs bdpt");
+}
+
 /// The caustic scene's glass and mirror are seen directly, which a light
 /// tracer cannot render; PT and BDPT must still agree.
 #[test]

@@ -20,6 +20,7 @@ mod determinism;
 mod furnace;
 mod fuzz;
 mod lights;
+mod mtl;
 mod outputs;
 mod progressive;
 mod reliability;
