@@ -314,7 +314,7 @@ impl Plastic {
     }
 
     /// Returns (wi, weight, pdf, delta): the coat's reflection (mirror or
-    /// GGX) with probability [`Plastic::coat_probability`], else a
+    /// GGX) with the coat's probability (see `coat_probability`), else a
     /// cosine-distributed direction into the base.
     #[inline(never)]
     pub fn sample(&self, wo: Vec3, u: (f32, f32), u_lobe: f32) -> Option<(Vec3, Rgb, f32, bool)> {
