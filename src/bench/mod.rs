@@ -64,7 +64,8 @@ pub struct BenchOptions {
     pub threads: Vec<usize>,
     /// Timed repetitions per measurement; the median is reported.
     pub runs: usize,
-    /// Write each generated ray set here, in the rays-file format.
+    /// Write each generated ray set here, in the rays-file format, and the
+    /// triangles traced (`triangles.f32`), so other tools trace the same scene.
     pub save_rays: Option<PathBuf>,
 }
 
@@ -223,6 +224,7 @@ pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
         for (name, rays) in &sets {
             rays::write_file(&dir.join(format!("{name}.rays")), rays)?;
         }
+        rays::write_triangles(&dir.join("triangles.f32"), &triangles)?;
     }
 
     let mut traces = Vec::new();

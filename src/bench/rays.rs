@@ -152,6 +152,20 @@ pub fn read_file(path: &Path) -> Result<Vec<Ray>> {
         .collect())
 }
 
+/// Writes the triangles as 36-byte little-endian records (three vertices,
+/// x y z each, as f32), in the order the BVH numbers them.
+pub fn write_triangles(path: &Path, triangles: &[Triangle]) -> Result<()> {
+    let mut bytes = Vec::with_capacity(triangles.len() * 36);
+    for t in triangles {
+        for v in t.v {
+            for c in v.to_array() {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    crate::film::write::write_atomic(path, &bytes)
+}
+
 /// Writes rays in the same format, for other tools to trace.
 pub fn write_file(path: &Path, rays: &[Ray]) -> Result<()> {
     let mut bytes = Vec::with_capacity(rays.len() * RECORD_BYTES);
