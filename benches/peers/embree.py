@@ -1,0 +1,198 @@
+#!/usr/bin/env python3
+"""BVH build and ray traversal: tracer against Intel Embree 4 on the very
+same triangles and rays, measured in one run.
+
+For each input (an OBJ mesh, or a scene file whose camera makes the primary
+rays), `tracer bench --save-rays` writes its ray sets (primary, diffuse,
+incoherent, shadow) and the triangles it traced, and measures itself; then
+Embree, through `embreex` (Embree 4.4 with TBB), builds a BVH over the same
+triangles and traces the same rays, once per thread count, in a process
+pinned to that many CPUs (so TBB's build uses exactly those). It prints one
+table per input: Mrays/s for tracer and Embree, their ratio, and whether the
+hit counts and the sums of closest-hit distances agree.
+
+Embree is called as embreex calls it: `rtcIntersect1` / `rtcOccluded1` one
+ray at a time in a compiled loop over numpy arrays, the closest-hit query
+returning the primitive ids (distances are read in a separate, untimed
+pass). With more than one thread the rays are split into one contiguous
+range per thread, traced from Python threads (embreex releases the GIL
+around its loop).
+
+    benches/peers/embree.py ../shared/meshes/dragon.obj --threads 1,2
+    benches/peers/embree.py scenes/cornell-box.json --runs 3 --out target/embree
+
+Needs `pip install embreex==4.4.0.post1 numpy` (requirements.txt).
+"""
+
+import argparse
+import concurrent.futures
+import datetime
+import importlib.metadata
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SETS = ("primary", "diffuse", "incoherent", "shadow")
+
+
+def load_rays(path):
+    """Origins, directions and far distances of a rays file; a ray with a
+    non-zero tmin starts tmin further along (Embree's tnear is 0 here)."""
+    r = np.fromfile(path, np.float32).reshape(-1, 8)
+    tmin, tmax = r[:, 3], r[:, 7]
+    origins = np.ascontiguousarray(r[:, :3] + r[:, 4:7] * tmin[:, None])
+    dirs = np.ascontiguousarray(r[:, 4:7])
+    far = np.ascontiguousarray(tmax - tmin)
+    return origins, dirs, far
+
+
+def median_seconds(runs, f):
+    times = []
+    for _ in range(max(1, runs)):
+        start = time.perf_counter()
+        f()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def worker(folder, threads, runs):
+    """Embree's figures for one thread count (run in a pinned process)."""
+    import embreex.mesh_construction as mesh
+    import embreex.rtcore_scene as rts
+
+    triangles = np.fromfile(os.path.join(folder, "triangles.f32"), np.float32).reshape(-1, 3, 3)
+    probe = (np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
+    scenes = []
+
+    def build():
+        scene = rts.EmbreeScene()
+        mesh.TriangleMesh(scene, triangles)
+        scene.run(*probe)  # embreex commits (builds) on the first query
+        scenes.append(scene)
+
+    build_seconds = median_seconds(min(runs, 3), build)
+    scene = scenes[-1]
+    pool = concurrent.futures.ThreadPoolExecutor(threads)
+
+    def split(n):
+        bounds = np.linspace(0, n, threads + 1).astype(int)
+        return [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
+
+    def parallel(o, d, far, query):
+        parts = split(len(o))
+        # embreex writes the hit distances into the array it is given: a fresh copy each time.
+        futures = [pool.submit(scene.run, o[p], d[p], far[p].copy(), query) for p in parts]
+        return np.concatenate([f.result() for f in futures])
+
+    traces = []
+    for name in SETS:
+        path = os.path.join(folder, f"{name}.rays")
+        if not os.path.exists(path):
+            continue
+        o, d, far = load_rays(path)
+        closest = scene.run(o, d, far.copy(), output=1)
+        hit = closest["primID"] != -1
+        distance_sum = float(closest["tfar"][hit].astype(np.float64).sum())
+        for query, kind in (("closest", "INTERSECT"), ("any", "OCCLUDED")):
+            result = parallel(o, d, far, kind)
+            hits = int((result != -1).sum())
+            seconds = median_seconds(runs, lambda: parallel(o, d, far, kind))
+            traces.append({"rays": name, "query": query, "threads": threads, "count": len(o),
+                           "mrays_per_second": len(o) / seconds / 1e6, "hits": hits,
+                           "distance_sum": distance_sum if query == "closest" else 0.0})
+    return {"threads": threads, "build_seconds": build_seconds, "traces": traces}
+
+
+def run_worker(folder, threads, runs):
+    """Embree's figures in a child process pinned to the first `threads` CPUs."""
+    cpus = sorted(os.sched_getaffinity(0))[:threads]
+    code = ("import os, sys, json; sys.path.insert(0, %r); os.sched_setaffinity(0, %r); "
+            "import embree; print(json.dumps(embree.worker(%r, %d, %d)))"
+            % (os.path.dirname(os.path.abspath(__file__)), cpus, folder, threads, runs))
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def tracer_bench(tracer, source, folder, threads, runs):
+    cmd = [tracer, "bench", source, "--json", "--runs", str(runs), "--save-rays", folder,
+           "--threads", ",".join(map(str, threads))]
+    out = subprocess.run(cmd, check=True, capture_output=True, text=True)
+    return json.loads(out.stdout)
+
+
+def table(ours, embree):
+    lines = ["| rays | query | threads | tracer Mrays/s | Embree Mrays/s | tracer / Embree | hits (tracer, Embree) | distance sums |",
+             "|---|---|---:|---:|---:|---:|---|---|"]
+    theirs = {(t["rays"], t["query"], t["threads"]): t for e in embree for t in e["traces"]}
+    for t in ours["traces"]:
+        e = theirs.get((t["rays"], t["query"], t["threads"]))
+        if e is None:
+            continue
+        same = "equal" if t["hits"] == e["hits"] else f"{t['hits']} vs {e['hits']}"
+        if t["query"] == "closest" and e["distance_sum"] > 0:
+            rel = abs(t["distance_sum"] - e["distance_sum"]) / e["distance_sum"]
+            sums = f"rel. diff {rel:.1e}"
+        else:
+            sums = "-"
+        lines.append(f"| {t['rays']} | {t['query']} | {t['threads']} | {t['mrays_per_second']:.2f} | "
+                     f"{e['mrays_per_second']:.2f} | {t['mrays_per_second'] / e['mrays_per_second']:.2f} | "
+                     f"{same} | {sums} |")
+    lines += ["", "| build | threads | tracer s | Embree s | Embree / tracer |", "|---|---:|---:|---:|---:|"]
+    builds = {e["threads"]: e["build_seconds"] for e in embree}
+    for b in ours["builds"]:
+        if b["threads"] in builds:
+            e = builds[b["threads"]]
+            lines.append(f"| {ours['triangles']} triangles | {b['threads']} | {b['seconds']:.3f} | "
+                         f"{e:.3f} | {e / b['seconds']:.2f} |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("inputs", nargs="+", help="OBJ meshes or scene files")
+    ap.add_argument("--threads", default="1,2", help="thread counts, e.g. 1,2")
+    ap.add_argument("--runs", type=int, default=5, help="timed runs per figure (median)")
+    ap.add_argument("--out", default=os.path.join(ROOT, "target", "embree"))
+    ap.add_argument("--tracer", default=os.path.join(ROOT, "target", "release", "tracer"))
+    ap.add_argument("--no-build", action="store_true", help="do not run cargo build --release")
+    args = ap.parse_args(argv)
+    threads = [int(t) for t in args.threads.split(",")]
+    if not args.no_build:
+        subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
+    os.makedirs(args.out, exist_ok=True)
+    report = {
+        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} CPUs",
+        "embreex": importlib.metadata.version("embreex"),
+        "tracer": subprocess.run([args.tracer, "--version"], capture_output=True, text=True).stdout.strip(),
+        "inputs": [],
+    }
+    md = [f"# tracer against Embree\n\n- date: {report['date']}\n- machine: {report['machine']}\n"
+          f"- {report['tracer']}; embreex {report['embreex']} (Embree 4.4)\n"
+          f"- medians of {args.runs} runs; Mrays/s = rays / seconds\n"]
+    for source in args.inputs:
+        name = os.path.splitext(os.path.basename(source))[0]
+        folder = os.path.join(args.out, name)
+        print(f"== {source}", flush=True)
+        ours = tracer_bench(args.tracer, source, folder, threads, args.runs)
+        embree = [run_worker(folder, t, args.runs) for t in threads]
+        report["inputs"].append({"input": source, "tracer": ours, "embree": embree})
+        text = table(ours, embree)
+        print(text, flush=True)
+        md.append(f"## {source} ({ours['triangles']} triangles)\n\n{text}\n")
+    with open(os.path.join(args.out, "results.json"), "w") as f:
+        json.dump(report, f, indent=1)
+    with open(os.path.join(args.out, "results.md"), "w") as f:
+        f.write("\n".join(md))
+    print(f"wrote {args.out}/results.json and results.md")
+
+
+if __name__ == "__main__":
+    main()
