@@ -148,6 +148,9 @@ impl Ctx<'_> {
                  it cannot be moved, scaled or mirrored)",
             ));
         }
-        Ok(m)
+        // Make it exactly orthonormal, so its transpose is its inverse.
+        let x = m.x_axis.normalize();
+        let y = (m.y_axis - x * x.dot(m.y_axis)).normalize();
+        Ok(glam::Mat3::from_cols(x, y, x.cross(y)))
     }
 }

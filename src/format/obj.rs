@@ -176,7 +176,9 @@ fn complete_colours(bytes: Vec<u8>) -> Vec<u8> {
 /// exponent `Ns` makes a plastic
 /// of alpha = √(2 / (Ns + 2)), Walter et al.'s (2007) match of a Phong
 /// lobe to a microfacet one. A metal's colour is `Kd` (the PBR base
-/// colour) with Fresnel 1; a plastic's coat takes `Ni` when it is above 1.
+/// colour) with Fresnel 1 (a `map_Kd` is not used for it); a plastic's
+/// coat takes `Ni` when it is above 1. `Ks`'s magnitude is not used: any
+/// non-black `Ks` turns on a full Fresnel coat.
 fn glossy_material(
     m: &tobj::Material,
     albedo: AlbedoDesc,

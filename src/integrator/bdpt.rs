@@ -202,10 +202,19 @@ fn hit_emitter(scene: &Scene, light: usize, wo: Vec3, walk: &Walk) -> Weighted {
         // Seen directly: no other strategy makes this path.
         return (emitted, 1.0);
     }
-    let pick = scene.light_selector.pmf(light);
     let (direct_pdf, emission_pdf) = area.pdfs_for_hit(wo);
-    let w_camera = mis(direct_pdf * pick) * walk.d_vcm + mis(emission_pdf * pick) * walk.d_vc;
-    (emitted, 1.0 / (1.0 + w_camera))
+    let pick = scene.light_selector.pmf(light);
+    (
+        emitted,
+        camera_hit_weight(walk, pick * direct_pdf, pick * emission_pdf),
+    )
+}
+
+/// The weight of s = 0 for a path whose light end has these densities
+/// (light sampling; emission), the light's selection included (eq. 43).
+#[inline]
+fn camera_hit_weight(walk: &Walk, direct_pdf: f32, emission_pdf: f32) -> f32 {
+    1.0 / (1.0 + mis(direct_pdf) * walk.d_vcm + mis(emission_pdf) * walk.d_vc)
 }
 
 /// s = 0 for the environment: the camera path has left the scene along
@@ -227,8 +236,10 @@ fn escaped(scene: &Scene, dir: Vec3, walk: &Walk) -> Weighted {
     }
     let pick = scene.light_selector.pmf(index);
     let pdfs = environment.pdfs_for_direction(dir);
-    let w_camera = mis(pdfs.direct * pick) * walk.d_vcm + mis(pdfs.emission * pick) * walk.d_vc;
-    (radiance, 1.0 / (1.0 + w_camera))
+    (
+        radiance,
+        camera_hit_weight(walk, pick * pdfs.direct, pick * pdfs.emission),
+    )
 }
 
 /// s = 1: a point chosen on a light, connected to the camera vertex (eq. 44).

@@ -1,7 +1,7 @@
 //! Light tracing: paths start on lights, and every vertex that is not a delta
 //! is connected to the camera and splatted into the pixel it projects to.
-//! Area lights seen directly are splatted too (the s = 1, t = 1 strategy), so
-//! this estimator shares no strategy with the path tracer: their agreement is
+//! Area lights and the environment seen directly are splatted too (the
+//! s = 1, t = 1 strategy), so this estimator shares no strategy with the path tracer: their agreement is
 //! a real check. Point and spot lights have no area and are never seen
 //! directly by the pinhole camera, in any integrator.
 

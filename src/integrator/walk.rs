@@ -32,7 +32,8 @@ pub struct Walk {
     pub length: u32,
     pub d_vcm: f32,
     pub d_vc: f32,
-    /// False for walks from a directional light: their first segment has no length.
+    /// False for walks from a directional or environment light: their first
+    /// segment has no length.
     pub finite_start: bool,
 }
 

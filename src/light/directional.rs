@@ -35,7 +35,8 @@ impl DirectionalLight {
         IncidentSample {
             wi: -self.direction,
             distance: f32::INFINITY,
-            point: receiver - self.direction * f32::INFINITY,
+            // Unused at an infinite distance (shadow rays go along `wi`).
+            point: receiver - self.direction,
             normal: Vec3::ZERO,
             magnitude: 0.0,
             value: self.irradiance,

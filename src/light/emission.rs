@@ -16,13 +16,14 @@ use glam::Vec3;
 /// The start of a light path.
 #[derive(Clone, Copy, Debug)]
 pub struct EmissionSample {
-    /// Where the path starts: on the light, or for a directional light on a
-    /// disk just outside the scene's bounding sphere.
+    /// Where the path starts: on the light, or for a directional or
+    /// environment light on a disk just outside the scene's bounding sphere.
     pub origin: Vec3,
     /// Unit direction the path leaves in.
     pub dir: Vec3,
     /// Emitted radiance times the cosine at the light (area lights), or
-    /// intensity (point, spot), or irradiance (directional).
+    /// intensity (point, spot), or irradiance (directional), or radiance
+    /// (environment).
     pub value: Rgb,
     /// Position density × direction density (directional: position only).
     pub emission_pdf: f32,
@@ -98,7 +99,9 @@ impl Light {
 mod tests {
     use super::*;
     use crate::geometry::Triangle;
-    use crate::light::{AreaLight, DirectionalLight, EnvironmentLight, PointLight, SpotLight};
+    use crate::light::{
+        AreaLight, DirectionalLight, EnvironmentLight, EnvironmentMap, PointLight, SpotLight,
+    };
 
     /// Emission samples carry power: E[value / pdf] over all directions is
     /// the light's flux, which selection by power assumes.
@@ -132,6 +135,28 @@ mod tests {
                 Rgb::new(0.5, 1.0, 2.0),
                 Vec3::ONE,
                 3.0,
+            )),
+            Light::Environment(EnvironmentLight::from_map(
+                std::sync::Arc::new(
+                    EnvironmentMap::new(
+                        16,
+                        8,
+                        (0..128)
+                            .map(|k| {
+                                Rgb::new(
+                                    0.5 + (k % 16) as f32 / 16.0,
+                                    1.0,
+                                    0.2 + (k / 16) as f32 / 8.0,
+                                )
+                            })
+                            .collect(),
+                    )
+                    .unwrap(),
+                ),
+                1.5,
+                glam::Mat3::from_rotation_x(0.4),
+                Vec3::ZERO,
+                2.0,
             )),
         ];
         for light in &lights {

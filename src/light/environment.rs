@@ -67,6 +67,9 @@ pub struct EnvironmentMap {
     cells: Vec<Option<Distribution1D>>,
     /// cos θ at each texel row: `cos(π i / (H − 1))`, decreasing.
     cos_rows: Vec<f32>,
+    /// cos θ at a band's top row minus at its bottom row, computed in f64
+    /// so that the polar bands of very tall maps keep a non-zero width.
+    band_heights: Vec<f32>,
     /// ∫ L dω over the sphere, averaged over RGB, before `scale`.
     integral: f32,
 }
@@ -94,15 +97,20 @@ impl EnvironmentMap {
         } else {
             height
         };
-        let cos_rows: Vec<f32> = (0..height)
-            .map(|i| (PI * i as f32 / (height - 1) as f32).cos())
+        let cos_rows_f64: Vec<f64> = (0..height)
+            .map(|i| (std::f64::consts::PI * i as f64 / (height - 1) as f64).cos())
+            .collect();
+        let cos_rows: Vec<f32> = cos_rows_f64.iter().map(|&c| c as f32).collect();
+        let band_heights: Vec<f32> = cos_rows_f64
+            .windows(2)
+            .map(|w| (w[0] - w[1]) as f32)
             .collect();
         let texel = |i: usize, j: usize| texels[i * width + j % width];
         let mut band_weights = Vec::with_capacity(height - 1);
         let mut cells = Vec::with_capacity(height - 1);
         let mut integral = 0.0f64;
-        for i in 0..height - 1 {
-            let band_solid_angle = 2.0 * PI * (cos_rows[i] - cos_rows[i + 1]) / width as f32;
+        for (i, &band_height) in band_heights.iter().enumerate() {
+            let band_solid_angle = 2.0 * PI * band_height / width as f32;
             let mut weights = Vec::with_capacity(width);
             for j in 0..width {
                 let corners = texel(i, j) + texel(i, j + 1) + texel(i + 1, j) + texel(i + 1, j + 1);
@@ -110,7 +118,7 @@ impl EnvironmentMap {
                 integral += (average(corners) * 0.25 * band_solid_angle) as f64;
             }
             let band_luminance: f32 = weights.iter().sum();
-            band_weights.push(band_luminance * (cos_rows[i] - cos_rows[i + 1]));
+            band_weights.push(band_luminance * band_height);
             cells.push(Distribution1D::new(&weights));
         }
         Ok(EnvironmentMap {
@@ -119,6 +127,7 @@ impl EnvironmentMap {
             bands: Distribution1D::new(&band_weights),
             cells,
             cos_rows,
+            band_heights,
             texels,
             integral: integral as f32,
         })
@@ -157,8 +166,10 @@ impl EnvironmentMap {
         let Some(cells) = &self.cells[band] else {
             return 0.0;
         };
-        let cell_solid_angle =
-            2.0 * PI * (self.cos_rows[band] - self.cos_rows[band + 1]) / self.width as f32;
+        let cell_solid_angle = 2.0 * PI * self.band_heights[band] / self.width as f32;
+        if cell_solid_angle <= 0.0 {
+            return 0.0;
+        }
         bands.pmf(band) * cells.pmf(column) / cell_solid_angle
     }
 
@@ -166,8 +177,7 @@ impl EnvironmentMap {
     fn sample(&self, u: (f32, f32)) -> Option<Vec3> {
         let (band, _, within_band) = self.bands.as_ref()?.sample_remapped(u.1);
         let (column, _, within_cell) = self.cells[band].as_ref()?.sample_remapped(u.0);
-        let cos_theta =
-            self.cos_rows[band] + (self.cos_rows[band + 1] - self.cos_rows[band]) * within_band;
+        let cos_theta = self.cos_rows[band] - self.band_heights[band] * within_band;
         let u = (column as f32 + 0.5 + within_cell) / self.width as f32;
         Some(from_image_point(u, cos_theta))
     }
@@ -281,7 +291,8 @@ impl EnvironmentLight {
         Some(IncidentSample {
             wi,
             distance: f32::INFINITY,
-            point: receiver + wi * f32::INFINITY,
+            // Unused at an infinite distance (shadow rays go along `wi`).
+            point: receiver + wi,
             normal: Vec3::ZERO,
             magnitude: 0.0,
             value,

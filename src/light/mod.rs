@@ -47,7 +47,8 @@ pub struct IncidentSample {
     pub wi: Vec3,
     /// Distance to the light point; infinite for directional and environment lights.
     pub distance: f32,
-    /// The sampled point on the light (for shadow rays).
+    /// The sampled point on the light (for shadow rays); for lights at an
+    /// infinite distance, a point one unit along `wi`, unused.
     pub point: Vec3,
     /// The light's surface normal there; zero for lights that are not surfaces.
     pub normal: Vec3,

@@ -107,7 +107,7 @@ pub enum Material {
         albedo: Albedo,
         /// Index of refraction of the coat; > 0.
         ior: f32,
-        /// GGX width of the coat; 0 is smooth.
+        /// GGX width of the coat; at most 1e-4 (e.g. 0) is a smooth coat.
         alpha: f32,
         /// The coat's share in choosing a lobe, from the mean albedo.
         specular_weight: f32,

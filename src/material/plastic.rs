@@ -68,10 +68,19 @@ pub fn specular_weight(mean_albedo: f32) -> f32 {
 /// The rough coat's tables for (`alpha`, `eta`), computed on first use.
 pub fn coat_tables(alpha: f32, eta: f32) -> &'static CoatTables {
     static TABLES: OnceLock<Mutex<HashMap<(u32, u32), &'static CoatTables>>> = OnceLock::new();
-    let mut tables = TABLES.get_or_init(Default::default).lock().unwrap();
+    let tables = TABLES.get_or_init(Default::default);
+    let key = (alpha.to_bits(), eta.to_bits());
+    if let Some(t) = tables.lock().unwrap().get(&key) {
+        return t;
+    }
+    // Computed without the lock, so coats of different widths build in
+    // parallel; a coat computed twice at once is kept once.
+    let computed = CoatTables::new(alpha, eta);
     tables
-        .entry((alpha.to_bits(), eta.to_bits()))
-        .or_insert_with(|| Box::leak(Box::new(CoatTables::new(alpha, eta))))
+        .lock()
+        .unwrap()
+        .entry(key)
+        .or_insert_with(|| Box::leak(Box::new(computed)))
 }
 
 impl CoatTables {
@@ -362,7 +371,8 @@ impl Plastic {
     }
 }
 
-/// A coat at least this rough gets tables; below it the coat is smooth.
+/// Whether a coat of width `alpha` is rough (it gets tables); at or below
+/// [`SMOOTH_ALPHA`] it is smooth.
 pub fn is_rough(alpha: f32) -> bool {
     alpha > SMOOTH_ALPHA
 }
