@@ -214,7 +214,8 @@ fn hit_emitter(scene: &Scene, light: usize, wo: Vec3, walk: &Walk) -> Weighted {
 /// (light sampling; emission), the light's selection included (eq. 43).
 #[inline]
 fn camera_hit_weight(walk: &Walk, direct_pdf: f32, emission_pdf: f32) -> f32 {
-    1.0 / (1.0 + mis(direct_pdf) * walk.d_vcm + mis(emission_pdf) * walk.d_vc)
+    let w_camera = mis(direct_pdf) * walk.d_vcm + mis(emission_pdf) * walk.d_vc;
+    1.0 / (1.0 + w_camera)
 }
 
 /// s = 0 for the environment: the camera path has left the scene along

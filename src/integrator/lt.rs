@@ -1,9 +1,10 @@
 //! Light tracing: paths start on lights, and every vertex that is not a delta
 //! is connected to the camera and splatted into the pixel it projects to.
 //! Area lights and the environment seen directly are splatted too (the
-//! s = 1, t = 1 strategy), so this estimator shares no strategy with the path tracer: their agreement is
-//! a real check. Point and spot lights have no area and are never seen
-//! directly by the pinhole camera, in any integrator.
+//! s = 1, t = 1 strategy), so this estimator shares no strategy with the
+//! path tracer: their agreement is a real check. Point and spot lights have
+//! no area and are never seen directly by the pinhole camera, in any
+//! integrator.
 
 use super::connect::sample_lens;
 use super::connect::{visible, CameraConnection, Endpoint};
@@ -13,7 +14,7 @@ use super::walk::{light_paths_per_pass, start_light_walk, LightStart};
 use crate::camera::Camera;
 use crate::color::is_black;
 use crate::geometry::Ray;
-use crate::light::{EnvironmentLight, Light};
+use crate::light::Light;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -62,8 +63,8 @@ fn splat_light_point(
 ) {
     let light = match &scene.lights[start.light] {
         Light::Area(light) => light,
-        Light::Environment(environment) => {
-            splat_sky(scene, camera, lens, environment, start, paths, sink);
+        Light::Environment(_) => {
+            splat_sky(scene, camera, lens, start, paths, sink);
             return;
         }
         _ => return,
@@ -92,7 +93,6 @@ fn splat_sky(
     scene: &Scene,
     camera: &Camera,
     lens: Vec3,
-    environment: &EnvironmentLight,
     start: &LightStart,
     paths: f32,
     sink: &mut SampleSink,
@@ -105,7 +105,7 @@ fn splat_sky(
     if scene.occluded(&Ray::new(lens, to_sky)) {
         return;
     }
-    let radiance = environment.radiance(to_sky);
-    let value = radiance / (start.pick * start.emission.direct_pdf_area);
+    // The emission sample's value is the sky's radiance along `to_sky`.
+    let value = start.emission.value / (start.pick * start.emission.direct_pdf_area);
     sink.emit(c.pixel, c.splat(value, paths));
 }

@@ -26,6 +26,7 @@ use super::{reflect, reflect_local};
 use crate::color::Rgb;
 use crate::sampling::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::f32::consts::FRAC_1_PI;
 use std::sync::{Mutex, OnceLock};
@@ -85,20 +86,28 @@ pub fn coat_tables(alpha: f32, eta: f32) -> &'static CoatTables {
 
 impl CoatTables {
     fn new(alpha: f32, eta: f32) -> CoatTables {
-        let mut transmittance = [0.0; TABLE_SIZE];
-        let mut internal = 0.0f64;
         // Mitsuba's resolutions: 32 nodes per axis entering a denser
         // medium, 128 leaving it (total internal reflection makes that
         // integrand less smooth).
         let nodes_in = gauss_legendre_01(if eta > 1.0 { 32 } else { 128 });
         let nodes_out = gauss_legendre_01(if 1.0 / eta > 1.0 { 32 } else { 128 });
-        for (i, t) in transmittance.iter_mut().enumerate() {
-            let mu = (i as f64 / (TABLE_SIZE - 1) as f64).max(1e-6);
-            let wi = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-            let (alpha, eta) = (alpha as f64, eta as f64);
-            *t = coat_integral(alpha, wi, eta, &nodes_in, true) as f32;
-            internal += coat_integral(alpha, wi, 1.0 / eta, &nodes_out, false) * mu;
-        }
+        let (alpha, eta) = (alpha as f64, eta as f64);
+        // About 75 ms of quadrature per coat on one core, paid at load:
+        // the 64 cosines are independent, so they run on the pool. The sum
+        // below is taken in index order, so the tables do not depend on it.
+        let rows: Vec<(f32, f64)> = (0..TABLE_SIZE)
+            .into_par_iter()
+            .map(|i| {
+                let mu = (i as f64 / (TABLE_SIZE - 1) as f64).max(1e-6);
+                let wi = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+                (
+                    coat_integral(alpha, wi, eta, &nodes_in, true) as f32,
+                    coat_integral(alpha, wi, 1.0 / eta, &nodes_out, false) * mu,
+                )
+            })
+            .collect();
+        let transmittance = std::array::from_fn(|i| rows[i].0);
+        let internal: f64 = rows.iter().map(|r| r.1).sum();
         CoatTables {
             transmittance,
             // Mitsuba's estimate of 2 ∫ R(μ) μ dμ: the plain mean over the table's cosines.
