@@ -57,12 +57,18 @@ pub enum IntegratorKind {
     Lt,
     /// Bidirectional path tracing.
     Bdpt,
+    /// Vertex connection and merging.
+    Vcm,
 }
 
 impl IntegratorKind {
     /// Every kind, in the order the command line lists them.
-    pub const ALL: [IntegratorKind; 3] =
-        [IntegratorKind::Pt, IntegratorKind::Lt, IntegratorKind::Bdpt];
+    pub const ALL: [IntegratorKind; 4] = [
+        IntegratorKind::Pt,
+        IntegratorKind::Lt,
+        IntegratorKind::Bdpt,
+        IntegratorKind::Vcm,
+    ];
 
     /// The name the scene format and the command line use.
     pub fn name(self) -> &'static str {
@@ -70,6 +76,7 @@ impl IntegratorKind {
             IntegratorKind::Pt => "pt",
             IntegratorKind::Lt => "lt",
             IntegratorKind::Bdpt => "bdpt",
+            IntegratorKind::Vcm => "vcm",
         }
     }
 
@@ -156,6 +163,10 @@ pub struct Settings {
     pub integrator: IntegratorKind,
     /// The most path segments (the camera ray is one; direct light needs two).
     pub max_depth: u32,
+    /// VCM's merging radius at the first sample, in scene units; `None`
+    /// for a fraction of the scene's size
+    /// ([`crate::integrator::DEFAULT_RADIUS_FRACTION`]).
+    pub vcm_radius: Option<f32>,
     /// The image is a pure function of the scene, the settings and the seed.
     pub seed: u64,
     /// When to stop sampling: sample count, time or noise.
@@ -186,6 +197,8 @@ pub enum Setting {
     SampleRange,
     /// Adaptive sampling without a target noise.
     Adaptive,
+    /// A VCM merging radius that is not a finite number above zero.
+    VcmRadius,
 }
 
 /// A refused setting and why.
@@ -212,6 +225,7 @@ impl Settings {
             },
             integrator: IntegratorKind::Pt,
             max_depth: 16,
+            vcm_radius: None,
             seed: 0,
             stop: StopRules {
                 spp: 16,
@@ -305,6 +319,14 @@ impl Settings {
                 Setting::Adaptive,
                 "adaptive sampling needs a target noise".into(),
             );
+        }
+        if let Some(r) = self.vcm_radius {
+            if !(r > 0.0 && r.is_finite()) {
+                return invalid(
+                    Setting::VcmRadius,
+                    format!("expected a number greater than zero, found {r}"),
+                );
+            }
         }
         Ok(())
     }

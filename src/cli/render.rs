@@ -39,6 +39,11 @@ pub struct RenderArgs {
     /// Maximum number of path segments.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub max_depth: Option<u32>,
+    /// VCM's merging radius at the first sample, in scene units (default:
+    /// 0.003 of the radius of the scene's bounding sphere); it shrinks as
+    /// sample^-1/8.
+    #[arg(long, value_name = "R", value_parser = positive_length)]
+    pub vcm_radius: Option<f32>,
     /// The image is a pure function of scene, settings and seed.
     #[arg(long)]
     pub seed: Option<u64>,
@@ -86,6 +91,14 @@ pub struct RenderArgs {
     pub preview: bool,
     #[command(flatten)]
     pub cache: CacheArgs,
+}
+
+/// A finite length greater than zero.
+fn positive_length(s: &str) -> std::result::Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!("expected a number greater than zero, found {s:?}")),
+    }
 }
 
 /// Any finite positive number of seconds; one too large for the clock
@@ -137,6 +150,7 @@ pub fn prepare(args: &RenderArgs) -> Result<(Scene, Settings, String)> {
             Setting::Crop => "--crop: ",
             Setting::SampleRange => "--sample-offset: ",
             Setting::Adaptive => "--adaptive: ",
+            Setting::VcmRadius => "--vcm-radius: ",
             Setting::Fov | Setting::Camera => "",
         };
         Error::Settings(format!("{flag}{}", e.message))
@@ -202,6 +216,9 @@ fn apply_overrides(s: &mut Settings, args: &RenderArgs) {
     }
     if let Some(d) = args.max_depth {
         s.max_depth = d;
+    }
+    if let Some(r) = args.vcm_radius {
+        s.vcm_radius = Some(r);
     }
     if let Some(seed) = args.seed {
         s.seed = seed;

@@ -137,6 +137,7 @@ fn settings_error(file: &Path, e: Invalid) -> Error {
         Setting::Camera => "camera",
         Setting::ImageSize => "film",
         Setting::Crop | Setting::SampleRange | Setting::Adaptive => "render",
+        Setting::VcmRadius => "render.vcm_radius",
     };
     Error::scene(file, key, e.message)
 }

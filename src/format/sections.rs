@@ -98,6 +98,8 @@ pub struct RenderDesc {
     pub max_depth: Count,
     #[serde(default)]
     pub seed: u64,
+    #[serde(default)]
+    pub vcm_radius: Option<Positive>,
 }
 
 fn default_integrator() -> IntegratorKind {
@@ -112,6 +114,7 @@ impl Default for RenderDesc {
             time_limit: None,
             max_depth: default_max_depth(),
             seed: 0,
+            vcm_radius: None,
         }
     }
 }
@@ -146,5 +149,6 @@ pub fn settings(
     s.stop.time_limit = render.time_limit.map(|t| t.0);
     s.max_depth = render.max_depth.0;
     s.seed = render.seed;
+    s.vcm_radius = render.vcm_radius.map(|r| r.0);
     s
 }

@@ -19,7 +19,8 @@ use super::connect::{sample_lens, visible, Endpoint};
 use super::light_path::{camera_splat, follow_light_walk};
 use super::mis::mis;
 use super::sink::SampleSink;
-use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, Walk};
+use super::vcm::LightPass;
+use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, MergeWeights, Walk};
 use super::{PixelSample, ThreadState};
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
@@ -55,49 +56,51 @@ impl Bidirectional {
     ) -> Rgb {
         let mut camera_sampler = pixel.camera_sampler();
         let mut light_sampler = pixel.light_sampler();
-        let (jx, jy) = camera_sampler.next_2d();
+        let jitter = camera_sampler.next_2d();
         let light_vertices = &mut state.light_vertices;
         light_vertices.clear();
-        self.trace_light_path(scene, camera, &mut light_sampler, light_vertices, sink);
-        let (x, y) = (pixel.x as f32 + jx, pixel.y as f32 + jy);
-        let index = y as u32 * camera.width() + x as u32;
-        let ray = camera.ray_from(sample_lens(camera, &mut camera_sampler), x, y);
-        let camera_pdf = camera.direction_pdf(ray.dir);
-        if camera_pdf <= 0.0 {
+        self.trace_light_path(
+            scene,
+            camera,
+            &mut light_sampler,
+            MergeWeights::NONE,
+            light_vertices,
+            sink,
+        );
+        let Some((walk, index)) = start_camera_walk(
+            camera,
+            &mut camera_sampler,
+            pixel,
+            jitter,
+            MergeWeights::NONE,
+        ) else {
             return Rgb::ZERO;
-        }
-        let walk = Walk {
-            origin: ray.origin,
-            dir: ray.dir,
-            throughput: Rgb::ONE,
-            length: 1,
-            // Eq. 31 for the camera: the light tracer's density relative to this one.
-            d_vcm: mis(light_paths_per_pass(camera) / camera_pdf),
-            d_vc: 0.0,
-            finite_start: true,
         };
         self.trace_camera_path(
             scene,
             walk,
             &mut camera_sampler,
             light_vertices,
+            None,
             index,
             sink,
         )
     }
 
-    /// The light subpath: its vertices are kept for connections, and each
-    /// is joined to the camera (t = 1, report eq. 44 for the weight).
-    fn trace_light_path(
+    /// The light subpath: its vertices are kept for connections (and
+    /// merges), and each is joined to the camera (t = 1, report eq. 44 for
+    /// the weight).
+    pub(super) fn trace_light_path(
         &self,
         scene: &Scene,
         camera: &Camera,
         sampler: &mut Sampler,
+        merging: MergeWeights,
         keep: &mut Vec<LightVertex>,
         sink: &mut SampleSink,
     ) {
         sampler.start_vertex();
-        let Some(start) = start_light_walk(scene, sampler) else {
+        let Some(start) = start_light_walk(scene, sampler, merging) else {
             return;
         };
         let paths = light_paths_per_pass(camera);
@@ -108,7 +111,7 @@ impl Bidirectional {
                 let (_, reverse_pdf) = v.bsdf.pdfs(v.wo, c.dir_to_camera);
                 let cos_surface = c.dir_to_camera.dot(v.surface.geometric_normal).abs();
                 let w_light = mis(c.camera_pdf_area(cos_surface) / paths)
-                    * (v.d_vcm + v.d_vc * mis(reverse_pdf));
+                    * (merging.vm + v.d_vcm + v.d_vc * mis(reverse_pdf));
                 let weight = 1.0 / (w_light + 1.0);
                 sink.emit(c.pixel, value * weight);
                 sink.record(v.length + 1, 1, c.pixel, value, weight);
@@ -117,13 +120,16 @@ impl Bidirectional {
     }
 
     /// The camera subpath from `walk`: at each vertex, the strategies with
-    /// t camera vertices (s = 0, s = 1, and every stored light vertex).
-    fn trace_camera_path(
+    /// t camera vertices (s = 0, s = 1, every stored light vertex and, for
+    /// VCM, merges with the iteration's light vertices nearby).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn trace_camera_path(
         &self,
         scene: &Scene,
         mut walk: Walk,
         sampler: &mut Sampler,
         light_vertices: &[LightVertex],
+        merges: Option<&LightPass>,
         pixel: u32,
         sink: &mut SampleSink,
     ) -> Rgb {
@@ -179,6 +185,9 @@ impl Bidirectional {
                     let l = walk.throughput * v.throughput * l;
                     add(&mut result, (l, weight), v.length + 1, t, sink);
                 }
+                if let Some(pass) = merges {
+                    result += walk.throughput * pass.merge(&surface, &bsdf, wo, &walk, max_depth);
+                }
             }
             if !walk.scatter(&bsdf, &surface, wo, sampler, Transport::Radiance) {
                 break;
@@ -187,6 +196,38 @@ impl Bidirectional {
         }
         result
     }
+}
+
+/// The first segment of a camera subpath through `pixel`, jittered by
+/// `jitter`, and the pixel's row-major index; `None` when the camera
+/// cannot have sent the ray.
+pub(super) fn start_camera_walk(
+    camera: &Camera,
+    sampler: &mut Sampler,
+    pixel: PixelSample,
+    (jx, jy): (f32, f32),
+    merging: MergeWeights,
+) -> Option<(Walk, u32)> {
+    let (x, y) = (pixel.x as f32 + jx, pixel.y as f32 + jy);
+    let index = y as u32 * camera.width() + x as u32;
+    let ray = camera.ray_from(sample_lens(camera, sampler), x, y);
+    let camera_pdf = camera.direction_pdf(ray.dir);
+    if camera_pdf <= 0.0 {
+        return None;
+    }
+    let walk = Walk {
+        origin: ray.origin,
+        dir: ray.dir,
+        throughput: Rgb::ONE,
+        length: 1,
+        // Eq. 31 for the camera: the light tracer's density relative to this one.
+        d_vcm: mis(light_paths_per_pass(camera) / camera_pdf),
+        d_vc: 0.0,
+        d_vm: 0.0,
+        merging,
+        finite_start: true,
+    };
+    Some((walk, index))
 }
 
 /// s = 0: the camera path has reached an emitter (eq. 43).
@@ -272,7 +313,7 @@ fn light_sample(
     let cos_receiver = sample.wi.dot(surface.geometric_normal).abs();
     let w_light = mis(bsdf_pdf / (pick * pdfs.direct));
     let w_camera = mis(pdfs.emission * cos_receiver / (pdfs.direct * pdfs.cos_light))
-        * (walk.d_vcm + walk.d_vc * mis(reverse_pdf));
+        * (walk.merging.vm + walk.d_vcm + walk.d_vc * mis(reverse_pdf));
     let weight = 1.0 / (w_light + 1.0 + w_camera);
     let contribution = f * sample.value / (pick * sample.pdf);
     if is_black(contribution) || !super::connect::unoccluded(scene, surface, &sample) {
@@ -313,8 +354,9 @@ fn connect(
     // Solid-angle densities turned into area densities at the other end.
     let camera_pdf_area = camera_pdf * cos_light / distance2;
     let light_pdf_area = light_pdf * cos_camera / distance2;
-    let w_light = mis(camera_pdf_area) * (v.d_vcm + v.d_vc * mis(light_reverse));
-    let w_camera = mis(light_pdf_area) * (walk.d_vcm + walk.d_vc * mis(camera_reverse));
+    let vm = walk.merging.vm;
+    let w_light = mis(camera_pdf_area) * (vm + v.d_vcm + v.d_vc * mis(light_reverse));
+    let w_camera = mis(light_pdf_area) * (vm + walk.d_vcm + walk.d_vc * mis(camera_reverse));
     let weight = 1.0 / (w_light + 1.0 + w_camera);
     let contribution = camera_f * light_f / distance2;
     if is_black(contribution)

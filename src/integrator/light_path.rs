@@ -47,6 +47,7 @@ pub fn follow_light_walk(
                 length: walk.length,
                 d_vcm: walk.d_vcm,
                 d_vc: walk.d_vc,
+                d_vm: walk.d_vm,
             });
         }
         // A further vertex would need at least one more segment to reach the camera.

@@ -10,7 +10,7 @@ use super::connect::sample_lens;
 use super::connect::{visible, CameraConnection, Endpoint};
 use super::light_path::{camera_splat, follow_light_walk};
 use super::sink::SampleSink;
-use super::walk::{light_paths_per_pass, start_light_walk, LightStart};
+use super::walk::{light_paths_per_pass, start_light_walk, LightStart, MergeWeights};
 use crate::camera::Camera;
 use crate::color::is_black;
 use crate::geometry::Ray;
@@ -36,7 +36,7 @@ impl LightTracer {
         sink: &mut SampleSink,
     ) {
         sampler.start_vertex();
-        let Some(start) = start_light_walk(scene, sampler) else {
+        let Some(start) = start_light_walk(scene, sampler, MergeWeights::NONE) else {
             return;
         };
         let paths = light_paths_per_pass(camera);

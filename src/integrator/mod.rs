@@ -15,18 +15,20 @@ mod lt;
 pub mod mis;
 mod pt;
 mod sink;
+mod vcm;
 mod walk;
 
 pub use bdpt::Bidirectional;
 pub use lt::LightTracer;
 pub use pt::PathTracer;
 pub use sink::{SampleSink, StrategySample};
+pub use vcm::{LightPass, VertexMerging, DEFAULT_RADIUS_FRACTION, RADIUS_ALPHA};
 
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::sampling::{PixelSeed, Sampler};
 use crate::scene::Scene;
-use crate::settings::IntegratorKind;
+use crate::settings::{IntegratorKind, Settings};
 use walk::LightVertex;
 
 /// Paths at least this many segments long are continued by Russian roulette.
@@ -38,7 +40,7 @@ pub const ROULETTE_START: u32 = 4;
 const LIGHT_SEED_DOMAIN: u64 = 0x9e37_79b9_7f4a_7c15;
 
 /// An estimator with its settings.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Integrator {
     /// Path tracing: next-event estimation and BSDF sampling, combined by MIS.
     Pt(PathTracer),
@@ -46,6 +48,8 @@ pub enum Integrator {
     Lt(LightTracer),
     /// Bidirectional path tracing: every connection strategy, MIS-weighted.
     Bdpt(Bidirectional),
+    /// Vertex connection and merging: BDPT's strategies and photon merging.
+    Vcm(VertexMerging),
 }
 
 /// Which sample this is: sample `index` of pixel (`x`, `y`) of a render
@@ -103,12 +107,17 @@ pub struct ThreadState {
 }
 
 impl Integrator {
-    /// The estimator of `kind` with paths of at most `max_depth` segments.
-    pub fn new(kind: IntegratorKind, max_depth: u32) -> Integrator {
-        match kind {
+    /// The estimator `settings` ask for, with their path length and merging radius.
+    pub fn new(settings: &Settings) -> Integrator {
+        let max_depth = settings.max_depth;
+        match settings.integrator {
             IntegratorKind::Pt => Integrator::Pt(PathTracer { max_depth }),
             IntegratorKind::Lt => Integrator::Lt(LightTracer { max_depth }),
             IntegratorKind::Bdpt => Integrator::Bdpt(Bidirectional { max_depth }),
+            IntegratorKind::Vcm => Integrator::Vcm(VertexMerging {
+                max_depth,
+                radius: settings.vcm_radius,
+            }),
         }
     }
 
@@ -118,6 +127,7 @@ impl Integrator {
             Integrator::Pt(_) => IntegratorKind::Pt,
             Integrator::Lt(_) => IntegratorKind::Lt,
             Integrator::Bdpt(_) => IntegratorKind::Bdpt,
+            Integrator::Vcm(_) => IntegratorKind::Vcm,
         }
     }
 
@@ -129,23 +139,49 @@ impl Integrator {
     }
 
     /// Light paths each pixel sample traces, over which the splats are
-    /// averaged: one for light tracing and BDPT, none for path tracing.
+    /// averaged: one for light tracing, BDPT and VCM, none for path tracing.
     pub fn light_paths_per_sample(&self) -> u64 {
         match self {
             Integrator::Pt(_) => 0,
-            Integrator::Lt(_) | Integrator::Bdpt(_) => 1,
+            Integrator::Lt(_) | Integrator::Bdpt(_) | Integrator::Vcm(_) => 1,
         }
     }
 
     /// Whether a pixel's own samples estimate its value, so its noise can
     /// decide when it has enough (adaptive sampling). A light tracer's
-    /// paths land anywhere: none of a pixel's light is its own.
+    /// paths land anywhere: none of a pixel's light is its own. VCM's
+    /// iteration traces every pixel's light path before any camera path,
+    /// so a pixel cannot stop on its own.
     pub fn supports_adaptive(&self) -> bool {
-        !matches!(self, Integrator::Lt(_))
+        matches!(self, Integrator::Pt(_) | Integrator::Bdpt(_))
+    }
+
+    /// Whether each sample index is an iteration that starts with a light
+    /// pass over the whole image ([`Integrator::light_pass`]), whose
+    /// result every camera sample of that index reads (VCM).
+    pub fn has_light_pass(&self) -> bool {
+        matches!(self, Integrator::Vcm(_))
+    }
+
+    /// The light pass of sample `index` (see [`Integrator::has_light_pass`]),
+    /// run on the current rayon pool; `None` for estimators without one.
+    pub fn light_pass(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        seed: u64,
+        index: u64,
+    ) -> Option<LightPass> {
+        match self {
+            Integrator::Vcm(vcm) => Some(vcm.light_pass(scene, camera, seed, index)),
+            _ => None,
+        }
     }
 
     /// Takes one sample of `pixel` through `camera`: returns the estimate
     /// for the pixel itself, and pushes splats for other pixels to `sink`.
+    /// `light_pass` is the pass of the sample's index for an estimator that
+    /// has one; without it, such an estimator returns zero.
     #[inline]
     pub fn sample(
         &self,
@@ -154,6 +190,7 @@ impl Integrator {
         pixel: PixelSample,
         state: &mut ThreadState,
         sink: &mut SampleSink,
+        light_pass: Option<&LightPass>,
     ) -> Rgb {
         match self {
             Integrator::Pt(pt) => pt.sample(scene, camera, pixel),
@@ -162,6 +199,9 @@ impl Integrator {
                 Rgb::ZERO
             }
             Integrator::Bdpt(bdpt) => bdpt.sample(scene, camera, pixel, state, sink),
+            Integrator::Vcm(vcm) => light_pass.map_or(Rgb::ZERO, |pass| {
+                vcm.sample(scene, camera, pixel, pass, sink)
+            }),
         }
     }
 }

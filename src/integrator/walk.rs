@@ -2,9 +2,11 @@
 //! bookkeeping of Georgiev's "Implementing Vertex Connection and Merging"
 //! (2012, "the report" below), starting light paths and scattering.
 //!
-//! Every subpath carries two running quantities, `d_vcm` and `d_vc` (the
-//! report's eqs. 31–35 with vertex merging switched off), from which the MIS
-//! weight of any connection follows in constant time. Densities enter them
+//! Every subpath carries three running quantities, `d_vcm`, `d_vc` and
+//! `d_vm` (the report's eqs. 31–35), from which the MIS weight of any
+//! connection or merge follows in constant time. BDPT runs them with vertex
+//! merging switched off ([`MergeWeights::NONE`]): `d_vm` is then unused and
+//! the others reduce to the report's BDPT form. Densities enter them
 //! through `mis` (the power heuristic's square). Russian roulette is left out
 //! of these densities on purpose: the weights are then a function of the path
 //! alone, so they sum to one over all strategies whatever roulette does, and
@@ -32,6 +34,9 @@ pub struct Walk {
     pub length: u32,
     pub d_vcm: f32,
     pub d_vc: f32,
+    pub d_vm: f32,
+    /// How merging enters the weights; [`MergeWeights::NONE`] for BDPT.
+    pub merging: MergeWeights,
     /// False for walks from a directional or environment light: their first
     /// segment has no length.
     pub finite_start: bool,
@@ -49,6 +54,32 @@ pub struct LightVertex {
     pub length: u32,
     pub d_vcm: f32,
     pub d_vc: f32,
+    pub d_vm: f32,
+}
+
+/// The two constants by which vertex merging enters the MIS quantities,
+/// from η = π r² N (merging radius r, N light paths per iteration): the
+/// report's η_VCM and its inverse, through the power heuristic.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergeWeights {
+    /// mis(η): how much more likely merging makes a path than a connection.
+    pub vm: f32,
+    /// mis(1/η): the inverse.
+    pub vc: f32,
+}
+
+impl MergeWeights {
+    /// No merging: BDPT.
+    pub const NONE: MergeWeights = MergeWeights { vm: 0.0, vc: 0.0 };
+
+    /// Merging within `radius` of a vertex, among `light_paths` paths.
+    pub fn new(radius: f32, light_paths: f32) -> MergeWeights {
+        let eta = std::f32::consts::PI * radius * radius * light_paths;
+        MergeWeights {
+            vm: mis(eta),
+            vc: mis(1.0 / eta),
+        }
+    }
 }
 
 impl Walk {
@@ -61,6 +92,7 @@ impl Walk {
         let c = mis(cos_in);
         self.d_vcm /= c;
         self.d_vc /= c;
+        self.d_vm /= c;
     }
 
     /// Samples the next direction at `surface`; false when the walk ends
@@ -80,12 +112,19 @@ impl Walk {
         };
         let cos_out = s.wi.dot(surface.geometric_normal).abs();
         if s.delta {
-            // Report eq. 34–35 for a specular vertex: it cannot be connected.
+            // Report eqs. 34–36 for a specular vertex: it can be neither
+            // connected nor merged at.
+            let c = mis(cos_out);
             self.d_vcm = 0.0;
-            self.d_vc *= mis(cos_out);
+            self.d_vc *= c;
+            self.d_vm *= c;
         } else {
             let (_, reverse_pdf) = bsdf.pdfs(wo, s.wi);
-            self.d_vc = mis(cos_out / s.pdf) * (self.d_vc * mis(reverse_pdf) + self.d_vcm);
+            let (scale, reverse) = (mis(cos_out / s.pdf), mis(reverse_pdf));
+            // With merging off, `+ vm` adds an exact zero: BDPT's weights
+            // are bit for bit those of the report's BDPT form.
+            self.d_vc = scale * (self.d_vc * reverse + self.d_vcm + self.merging.vm);
+            self.d_vm = scale * (self.d_vm * reverse + self.d_vcm * self.merging.vc + 1.0);
             self.d_vcm = mis(1.0 / s.pdf);
         }
         self.throughput *= s.weight;
@@ -122,7 +161,11 @@ pub struct LightStart {
 }
 
 /// Chooses a light by power and starts a walk from it (report eqs. 31–33).
-pub fn start_light_walk(scene: &Scene, sampler: &mut Sampler) -> Option<LightStart> {
+pub fn start_light_walk(
+    scene: &Scene,
+    sampler: &mut Sampler,
+    merging: MergeWeights,
+) -> Option<LightStart> {
     let (index, pick) = scene.light_selector.sample(sampler.next_1d())?;
     let light = &scene.lights[index];
     let u_pos = sampler.next_2d();
@@ -136,17 +179,20 @@ pub fn start_light_walk(scene: &Scene, sampler: &mut Sampler) -> Option<LightSta
         offset_origin(e.origin, e.normal, e.dir, e.magnitude)
     };
     let cos_used = if light.is_finite() { e.cos_light } else { 1.0 };
+    let d_vc = if light.is_delta() {
+        0.0
+    } else {
+        mis(cos_used / emission_pdf)
+    };
     let walk = Walk {
         origin,
         dir: e.dir,
         throughput: e.value / emission_pdf,
         length: 1,
         d_vcm: mis(direct_pdf / emission_pdf),
-        d_vc: if light.is_delta() {
-            0.0
-        } else {
-            mis(cos_used / emission_pdf)
-        },
+        d_vc,
+        d_vm: d_vc * merging.vc,
+        merging,
         finite_start: light.is_finite(),
     };
     Some(LightStart {

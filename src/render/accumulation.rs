@@ -7,7 +7,7 @@ use super::pass::light_paths;
 use super::strategies::StrategySums;
 use super::{splat_buffers, tiles, traced_area, RenderStats, Tile};
 use crate::film::{Image, Splat};
-use crate::integrator::StrategySample;
+use crate::integrator::{LightPass, StrategySample};
 use crate::settings::{Crop, Settings};
 use glam::DVec3;
 
@@ -39,9 +39,14 @@ pub struct Accumulation {
     pub(super) light_paths: [u64; 2],
     /// Light paths the integrator traces per pixel sample.
     pub(super) paths_per_sample: u64,
+    /// Whether light paths are traced by a light pass over the whole image
+    /// (and counted there) rather than by each tile's samples.
+    pub(super) light_pass: bool,
     pub(super) full_pixels: u64,
     /// Each BDPT strategy's share, when kept.
     pub(super) strategies: Option<StrategySums>,
+    /// Light-pass splats dropped for being NaN or infinite.
+    pub(super) light_pass_discarded: u64,
 }
 
 impl Accumulation {
@@ -50,6 +55,7 @@ impl Accumulation {
     pub(super) fn new(
         settings: &Settings,
         paths_per_sample: u64,
+        light_pass: bool,
         keep_strategies: bool,
     ) -> Accumulation {
         let splatting = paths_per_sample > 0;
@@ -63,8 +69,10 @@ impl Accumulation {
             splat_sums: splat_buffers(full_pixels, splatting),
             light_paths: [0, 0],
             paths_per_sample,
+            light_pass,
             full_pixels,
             strategies: keep_strategies.then(|| StrategySums::new(full_pixels as usize)),
+            light_pass_discarded: 0,
         }
     }
 
@@ -86,7 +94,7 @@ impl Accumulation {
                 self.splat_sums[h][splat.pixel as usize] += splat.value.as_dvec3();
             }
         }
-        if self.splatting {
+        if self.splatting && !self.light_pass {
             for (paths, n) in self.light_paths.iter_mut().zip(light_paths(
                 tile,
                 first,
@@ -101,6 +109,17 @@ impl Accumulation {
                 sums.add(records);
             }
         }
+    }
+
+    /// Adds the splats of sample `index`'s light pass, one light path per
+    /// pixel of the image.
+    pub(super) fn add_light_pass(&mut self, pass: &LightPass, index: u32) {
+        let half = (index % 2) as usize;
+        for splat in &pass.splats {
+            self.splat_sums[half][splat.pixel as usize] += splat.value.as_dvec3();
+        }
+        self.light_paths[half] += self.full_pixels;
+        self.light_pass_discarded += pass.discarded;
     }
 
     /// The image over the crop, each pixel divided by the samples it got.
@@ -219,7 +238,8 @@ impl Accumulation {
             .clone()
             .map(|t| t.spp() as u64 * t.pixel_count() as u64)
             .sum();
-        stats.discarded = self.tiles.iter().map(|t| t.discarded).sum();
+        stats.discarded =
+            self.tiles.iter().map(|t| t.discarded).sum::<u64>() + self.light_pass_discarded;
     }
 
     fn overlaps_crop(&self, t: &Tile) -> bool {

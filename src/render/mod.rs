@@ -111,10 +111,15 @@ pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
 /// with the camera.
 fn prepare(settings: &Settings) -> Result<(Integrator, crate::camera::Camera)> {
     settings.check().map_err(|e| Error::Settings(e.message))?;
-    let integrator = Integrator::new(settings.integrator, settings.max_depth);
+    let integrator = Integrator::new(settings);
     if settings.stop.adaptive && !integrator.supports_adaptive() {
+        let why = if integrator.has_light_pass() {
+            "its iterations trace every pixel's light path before any camera path"
+        } else {
+            "its paths land anywhere"
+        };
         return Err(Error::Settings(format!(
-            "adaptive sampling needs an integrator with per-pixel samples (pt or bdpt); {} paths land anywhere",
+            "adaptive sampling needs an integrator whose pixels can stop on their own (pt or bdpt); {}: {why}",
             settings.integrator.name()
         )));
     }
@@ -189,6 +194,7 @@ fn run(
     let mut acc = Accumulation::new(
         settings,
         integrator.light_paths_per_sample(),
+        integrator.has_light_pass(),
         keep_strategies,
     );
     let total = settings

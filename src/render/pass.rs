@@ -1,5 +1,7 @@
 //! One pass: every tile not yet done takes the same run of samples, tiles
-//! in parallel, and what they splat is merged in tile order.
+//! in parallel, and what they splat is merged in tile order. For an
+//! estimator with a light pass (VCM), each sample index is an iteration of
+//! its own: the light pass over the whole image first, then the tiles.
 
 use super::progress::Progress;
 use super::tiles::{self, Tile};
@@ -7,7 +9,9 @@ use super::Accumulation;
 use crate::camera::Camera;
 use crate::color::is_finite;
 use crate::film::Splat;
-use crate::integrator::{Integrator, PixelSample, SampleSink, StrategySample, ThreadState};
+use crate::integrator::{
+    Integrator, LightPass, PixelSample, SampleSink, StrategySample, ThreadState,
+};
 use crate::scene::Scene;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -19,6 +23,7 @@ const SPLAT_BATCH: usize = 64;
 /// What one tile hands back: its splats and strategy records, per half.
 type TileOutput = [(Vec<Splat>, Vec<StrategySample>); 2];
 
+#[derive(Clone, Copy)]
 pub(super) struct Pass<'a> {
     pub scene: &'a Scene,
     pub camera: &'a Camera,
@@ -40,6 +45,41 @@ impl Pass<'_> {
         acc: &mut Accumulation,
         skip: &(impl Fn() -> bool + Sync),
     ) {
+        if !self.integrator.has_light_pass() {
+            self.run_tiles(pool, acc, skip, None);
+            return;
+        }
+        for index in self.first..self.first + self.count {
+            // An iteration not begun is not begun at all: no light paths
+            // without the camera paths that need them.
+            if skip() {
+                return;
+            }
+            let light = pool.install(|| {
+                self.integrator
+                    .light_pass(self.scene, self.camera, self.seed, index as u64)
+            });
+            if let Some(light) = &light {
+                acc.add_light_pass(light, index);
+            }
+            let iteration = Pass {
+                first: index,
+                count: 1,
+                ..*self
+            };
+            iteration.run_tiles(pool, acc, skip, light.as_ref());
+        }
+    }
+
+    /// Every tile's share of the pass, given the light pass of its one
+    /// sample index for an estimator that has one.
+    fn run_tiles(
+        &self,
+        pool: &rayon::ThreadPool,
+        acc: &mut Accumulation,
+        skip: &(impl Fn() -> bool + Sync),
+        light: Option<&LightPass>,
+    ) {
         let batch = if acc.splatting {
             SPLAT_BATCH
         } else {
@@ -54,7 +94,7 @@ impl Pass<'_> {
                         if skip() || tile.converged {
                             return None;
                         }
-                        Some(self.tile(tile))
+                        Some(self.tile(tile, light))
                     })
                     .collect()
             });
@@ -68,7 +108,7 @@ impl Pass<'_> {
     }
 
     /// Adds this pass's samples to every pixel of `tile`.
-    fn tile(&self, tile: &mut Tile) -> TileOutput {
+    fn tile(&self, tile: &mut Tile, light: Option<&LightPass>) -> TileOutput {
         let sink = || SampleSink {
             strategies: self.keep_strategies.then(Vec::new),
             ..SampleSink::default()
@@ -88,6 +128,7 @@ impl Pass<'_> {
                         pixel,
                         &mut state,
                         &mut sinks[half],
+                        light,
                     );
                     if is_finite(l) {
                         sums[half] += l.as_dvec3();

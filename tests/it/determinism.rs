@@ -44,13 +44,18 @@ fn same_seed_same_image_for_any_thread_count() {
 fn adaptive_renders_and_sample_offsets_are_the_same_for_any_thread_count() {
     use tracer::settings::IntegratorKind;
     let _guard = common::heavy();
-    for integrator in [IntegratorKind::Pt, IntegratorKind::Bdpt, IntegratorKind::Lt] {
+    for integrator in [
+        IntegratorKind::Pt,
+        IntegratorKind::Bdpt,
+        IntegratorKind::Lt,
+        IntegratorKind::Vcm,
+    ] {
         let (scene, mut settings) = cornell(3);
         settings.integrator = integrator;
         settings.stop.spp = 1 << 12;
         settings.sample_offset = 5;
         settings.stop.target_noise = Some(0.3);
-        settings.stop.adaptive = integrator != IntegratorKind::Lt;
+        settings.stop.adaptive = matches!(integrator, IntegratorKind::Pt | IntegratorKind::Bdpt);
         let results: Vec<_> = [1, 3]
             .iter()
             .map(|&threads| {

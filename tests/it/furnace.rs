@@ -14,7 +14,12 @@ fn spp(integrator: IntegratorKind) -> u32 {
     }
 }
 
-const ALL: [IntegratorKind; 3] = [IntegratorKind::Pt, IntegratorKind::Lt, IntegratorKind::Bdpt];
+const ALL: [IntegratorKind; 4] = [
+    IntegratorKind::Pt,
+    IntegratorKind::Lt,
+    IntegratorKind::Bdpt,
+    IntegratorKind::Vcm,
+];
 
 /// Renders the scene with `integrator` from several seeds and checks every
 /// 4 × 4 block and the image mean against `expected`, within five standard
@@ -118,6 +123,7 @@ fn constant_sky_furnace_sees_radiance_one() {
     let _guard = common::heavy();
     check(SKY_FURNACE, IntegratorKind::Pt, 64, 1.0, 0.002);
     check(SKY_FURNACE, IntegratorKind::Bdpt, 64, 1.0, 0.002);
+    check(SKY_FURNACE, IntegratorKind::Vcm, 64, 1.0, 0.002);
     // A light path cannot reach the camera by way of a perfect mirror, so
     // the light tracer sees the diffuse sphere alone.
     let diffuse_only = SKY_FURNACE.replace(r#""material": "mirror""#, r#""material": "white""#);

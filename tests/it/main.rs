@@ -27,4 +27,5 @@ mod reliability;
 mod scene_errors;
 mod strategies;
 mod trs_import;
+mod vcm;
 mod warps;

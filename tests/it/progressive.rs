@@ -125,7 +125,11 @@ fn the_target_noise_stops_when_the_estimate_falls_below_it_and_tracks_the_true_e
 #[test]
 fn an_interrupted_render_returns_quickly_with_each_pixel_normalised() {
     let _guard = common::serial();
-    for integrator in [IntegratorKind::Pt, IntegratorKind::Bdpt] {
+    for integrator in [
+        IntegratorKind::Pt,
+        IntegratorKind::Bdpt,
+        IntegratorKind::Vcm,
+    ] {
         let (scene, mut settings) = cornell(48, 1 << 30);
         settings.integrator = integrator;
         let flag = Arc::new(AtomicBool::new(false));
@@ -437,7 +441,7 @@ fn merged(parts: &[PathBuf], dir: &Path) -> (Image, tracer::film::metadata::Meta
 #[test]
 fn four_sample_ranges_merged_equal_one_render_of_all_samples() {
     let _guard = common::heavy();
-    for integrator in ["pt", "lt", "bdpt"] {
+    for integrator in ["pt", "lt", "bdpt", "vcm"] {
         let dir = tempfile::tempdir().unwrap();
         let parts: Vec<PathBuf> = [0, 16, 32, 48]
             .iter()
@@ -478,7 +482,7 @@ fn four_sample_ranges_merged_equal_one_render_of_all_samples() {
 #[test]
 fn four_crops_merged_equal_the_full_image_exactly() {
     let _guard = common::heavy();
-    for integrator in ["pt", "bdpt"] {
+    for integrator in ["pt", "bdpt", "vcm"] {
         let dir = tempfile::tempdir().unwrap();
         let crops = ["0,0,20,17", "20,0,48,17", "0,17,20,40", "20,17,48,40"];
         let parts: Vec<PathBuf> = crops

@@ -1,0 +1,185 @@
+//! A hash grid over points, for finding every point within a fixed radius
+//! of a query (the light vertices a camera vertex merges with).
+//!
+//! Cells are cubes of twice the radius, so a query's ball touches at most
+//! the 2 × 2 × 2 cells around the nearest cell corner. Cells are hashed into
+//! as many buckets as there are points (rounded up to a power of two), and a
+//! counting sort lays the points out bucket by bucket, in their original
+//! order within a bucket: the grid, and so every sum over a query's points,
+//! is the same whatever the thread count.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Points gathered by hashed cell.
+pub struct HashGrid {
+    origin: Vec3,
+    /// 1 / cell edge.
+    inverse_cell: f32,
+    radius2: f32,
+    /// Bucket count − 1 (a power of two less one).
+    mask: u64,
+    /// Bucket `b` holds `entries[starts[b] .. starts[b + 1]]`.
+    starts: Vec<u32>,
+    /// Index of each point in the input, bucket by bucket.
+    entries: Vec<u32>,
+    /// The points in `entries` order, so the distance test reads memory in order.
+    positions: Vec<Vec3>,
+}
+
+impl HashGrid {
+    /// The grid of `points` for queries of `radius` (> 0). Cell keys are
+    /// computed in parallel on the current rayon pool.
+    pub fn build(points: &[Vec3], radius: f32) -> HashGrid {
+        let n = points.len();
+        let origin = points
+            .iter()
+            .fold(Vec3::splat(f32::INFINITY), |m, p| m.min(*p));
+        let origin = if origin.is_finite() {
+            origin
+        } else {
+            Vec3::ZERO
+        };
+        let buckets = n.max(1).next_power_of_two();
+        let mut grid = HashGrid {
+            origin,
+            inverse_cell: 1.0 / (2.0 * radius),
+            radius2: radius * radius,
+            mask: buckets as u64 - 1,
+            starts: vec![0; buckets + 1],
+            entries: vec![0; n],
+            positions: vec![Vec3::ZERO; n],
+        };
+        let keys: Vec<u32> = points
+            .par_iter()
+            .with_min_len(4096)
+            .map(|p| grid.bucket(grid.cell(*p)))
+            .collect();
+        for &k in &keys {
+            grid.starts[k as usize + 1] += 1;
+        }
+        for b in 0..buckets {
+            grid.starts[b + 1] += grid.starts[b];
+        }
+        let mut next = grid.starts.clone();
+        for (i, &k) in keys.iter().enumerate() {
+            let slot = &mut next[k as usize];
+            grid.entries[*slot as usize] = i as u32;
+            grid.positions[*slot as usize] = points[i];
+            *slot += 1;
+        }
+        grid
+    }
+
+    /// The cell coordinates of `p`, relative to the grid's origin.
+    fn cell_of(&self, p: Vec3) -> Vec3 {
+        (p - self.origin) * self.inverse_cell
+    }
+
+    fn cell(&self, p: Vec3) -> [i64; 3] {
+        let c = self.cell_of(p).floor();
+        // `as` saturates: a point absurdly far from the rest still gets a cell.
+        [c.x as i64, c.y as i64, c.z as i64]
+    }
+
+    fn bucket(&self, [x, y, z]: [i64; 3]) -> u32 {
+        // Three large odd multipliers spread neighbouring cells over the table.
+        let h = (x as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)
+            ^ (y as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f)
+            ^ (z as u64).wrapping_mul(0x1656_67b1_9e37_79f9);
+        ((h ^ (h >> 29)) & self.mask) as u32
+    }
+
+    /// Calls `visit` with the input index of every point within the radius
+    /// of `p` (distance ≤ radius), each exactly once, in a fixed order.
+    #[inline]
+    pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(u32)) {
+        if self.entries.is_empty() {
+            return;
+        }
+        let rel = self.cell_of(p);
+        let c = rel.floor();
+        let frac = rel - c;
+        let base = [c.x as i64, c.y as i64, c.z as i64];
+        // Towards the nearer neighbour along each axis.
+        let step = [frac.x, frac.y, frac.z].map(|f| if f < 0.5 { -1 } else { 1 });
+        let mut seen = [u32::MAX; 8];
+        for corner in 0..8usize {
+            let cell = [0, 1, 2].map(|a| base[a] + if corner >> a & 1 == 1 { step[a] } else { 0 });
+            let b = self.bucket(cell);
+            // Two cells may share a bucket: visit its points once.
+            if seen[..corner].contains(&b) {
+                continue;
+            }
+            seen[corner] = b;
+            let (start, end) = (self.starts[b as usize], self.starts[b as usize + 1]);
+            for k in start as usize..end as usize {
+                if (self.positions[k] - p).length_squared() <= self.radius2 {
+                    visit(self.entries[k]);
+                }
+            }
+        }
+    }
+
+    /// Points in the grid.
+    #[cfg(test)]
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether the grid holds no points.
+    #[cfg(test)]
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lcg(state: &mut u64) -> f32 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*state >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    /// Every query finds exactly the points a brute-force search finds,
+    /// each once, with points clustered so that buckets collide.
+    #[test]
+    fn finds_exactly_the_points_within_the_radius() {
+        let mut s = 7u64;
+        let mut points: Vec<Vec3> = (0..3000)
+            .map(|_| Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 4.0 - 2.0)
+            .collect();
+        // A dense cluster and exact duplicates.
+        points.extend((0..200).map(|i| Vec3::splat(0.3) + Vec3::X * (i % 7) as f32 * 1e-3));
+        for radius in [0.01, 0.07, 0.3, 5.0] {
+            let grid = HashGrid::build(&points, radius);
+            assert_eq!(grid.len(), points.len());
+            for q in 0..300 {
+                let p = if q % 3 == 0 {
+                    points[q * 7]
+                } else {
+                    Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 4.4 - 2.2
+                };
+                let mut found = Vec::new();
+                grid.for_each_near(p, |i| found.push(i));
+                let mut expected: Vec<u32> = (0..points.len() as u32)
+                    .filter(|&i| (points[i as usize] - p).length_squared() <= radius * radius)
+                    .collect();
+                found.sort_unstable();
+                expected.sort_unstable();
+                assert_eq!(found, expected, "radius {radius}, query {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn an_empty_grid_finds_nothing() {
+        let grid = HashGrid::build(&[], 0.1);
+        assert!(grid.is_empty());
+        grid.for_each_near(Vec3::ZERO, |_| panic!("found a point in an empty grid"));
+    }
+}

@@ -1,0 +1,223 @@
+//! Vertex connection and merging (Georgiev, Křivánek, Davidovič and
+//! Slusallek 2012; Hachisuka, Pantaleoni and Jensen 2012): BDPT plus photon
+//! density estimation, each path weighed by the power heuristic over both.
+//!
+//! Merging is what lets a renderer see paths that no connection can make:
+//! light → mirror → diffuse → mirror → camera with a point light, say (a
+//! caustic seen in a mirror). Every connection between two subpaths needs a
+//! non-delta vertex at each end, and that path has none to offer.
+//!
+//! Render sample `i` of every pixel is iteration `i`: first the light pass
+//! traces one light path per pixel (each the very path BDPT would trace
+//! for that pixel and sample), splats their camera connections, and puts
+//! their vertices in a hash grid; then each pixel's camera path connects
+//! to its own light path, as in BDPT, and merges at each non-delta vertex
+//! with every light vertex of the iteration within the radius
+//! r_i = r_0 · (i + 1)^((α − 1)/2), α = 3/4. The radius follows the global
+//! sample index, so a render split by `--sample-offset` and merged equals
+//! the render made in one go. Merging is biased for a radius above zero;
+//! the bias vanishes as the radius shrinks.
+
+mod grid;
+
+use super::bdpt::{start_camera_walk, Bidirectional};
+use super::mis::mis;
+use super::sink::SampleSink;
+use super::walk::{light_paths_per_pass, LightVertex, MergeWeights, Walk};
+use super::PixelSample;
+use crate::camera::Camera;
+use crate::color::{is_black, Rgb};
+use crate::film::Splat;
+use crate::geometry::SurfacePoint;
+use crate::material::Bsdf;
+use crate::scene::Scene;
+use glam::Vec3;
+use grid::HashGrid;
+use rayon::prelude::*;
+
+/// How fast the merging radius shrinks: r_i ∝ i^((α − 1)/2). 3/4 is the
+/// usual compromise between variance (α → 1) and bias (α → 0).
+pub const RADIUS_ALPHA: f64 = 0.75;
+
+/// The first iteration's radius when the render does not set one, as a
+/// fraction of the radius of the scene's bounding sphere.
+pub const DEFAULT_RADIUS_FRACTION: f32 = 0.003;
+
+/// Vertex connection and merging, and its settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VertexMerging {
+    /// The most segments a path may have, whichever strategy makes it.
+    pub max_depth: u32,
+    /// The merging radius of the first iteration, in scene units; `None`
+    /// for [`DEFAULT_RADIUS_FRACTION`] of the scene's bounding sphere.
+    pub radius: Option<f32>,
+}
+
+impl VertexMerging {
+    /// The first iteration's merging radius for `scene`.
+    pub fn base_radius(&self, scene: &Scene) -> f32 {
+        self.radius.unwrap_or_else(|| {
+            let (_, r) = scene.bounds.bounding_sphere();
+            // An empty scene has no radius; any positive one will do.
+            (DEFAULT_RADIUS_FRACTION * r).max(1e-6)
+        })
+    }
+
+    /// The merging radius of the iteration that takes sample `index` (from 0).
+    pub fn radius_at(&self, scene: &Scene, index: u64) -> f32 {
+        let iteration = (index + 1) as f64;
+        let shrink = iteration.powf((RADIUS_ALPHA - 1.0) / 2.0);
+        (self.base_radius(scene) as f64 * shrink).max(1e-30) as f32
+    }
+
+    /// The light pass of iteration `index`: one light path per pixel of
+    /// `camera`'s image, traced in parallel on the current rayon pool, row
+    /// by row, and gathered in pixel order.
+    pub fn light_pass(&self, scene: &Scene, camera: &Camera, seed: u64, index: u64) -> LightPass {
+        let radius = self.radius_at(scene, index);
+        let paths = light_paths_per_pass(camera);
+        let merging = MergeWeights::new(radius, paths);
+        let bdpt = Bidirectional {
+            max_depth: self.max_depth,
+        };
+        let width = camera.width();
+        let rows: Vec<(Vec<LightVertex>, Vec<u32>, SampleSink)> = (0..camera.height())
+            .into_par_iter()
+            .map(|y| {
+                let mut vertices = Vec::new();
+                let mut ends = Vec::with_capacity(width as usize);
+                let mut sink = SampleSink::default();
+                for x in 0..width {
+                    let pixel = PixelSample::new(x, y, index, seed);
+                    bdpt.trace_light_path(
+                        scene,
+                        camera,
+                        &mut pixel.light_sampler(),
+                        merging,
+                        &mut vertices,
+                        &mut sink,
+                    );
+                    ends.push(vertices.len() as u32);
+                }
+                (vertices, ends, sink)
+            })
+            .collect();
+        let total: usize = rows.iter().map(|r| r.0.len()).sum();
+        let mut pass = LightPass {
+            vertices: Vec::with_capacity(total),
+            starts: Vec::with_capacity(rows.len() * width as usize + 1),
+            grid: HashGrid::build(&[], radius),
+            merging,
+            normalization: 1.0 / (std::f32::consts::PI * radius * radius * paths),
+            width,
+            splats: Vec::new(),
+            discarded: 0,
+        };
+        pass.starts.push(0);
+        for (vertices, ends, sink) in rows {
+            let offset = pass.vertices.len() as u32;
+            pass.starts.extend(ends.iter().map(|e| e + offset));
+            pass.vertices.extend(vertices);
+            pass.splats.extend(sink.splats);
+            pass.discarded += sink.discarded;
+        }
+        let positions: Vec<Vec3> = pass.vertices.iter().map(|v| v.surface.position).collect();
+        pass.grid = HashGrid::build(&positions, radius);
+        pass
+    }
+
+    /// One camera path of `pixel` in the iteration whose light pass is `pass`.
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        pixel: PixelSample,
+        pass: &LightPass,
+        sink: &mut SampleSink,
+    ) -> Rgb {
+        let mut sampler = pixel.camera_sampler();
+        let jitter = sampler.next_2d();
+        let Some((walk, index)) =
+            start_camera_walk(camera, &mut sampler, pixel, jitter, pass.merging)
+        else {
+            return Rgb::ZERO;
+        };
+        let bdpt = Bidirectional {
+            max_depth: self.max_depth,
+        };
+        let own = pass.path_of(pixel.x, pixel.y);
+        bdpt.trace_camera_path(scene, walk, &mut sampler, own, Some(pass), index, sink)
+    }
+}
+
+/// What one iteration's light paths leave for its camera paths: their
+/// vertices (for connections, each pixel its own path, and for merging,
+/// all of them through the grid) and their splats into the image.
+pub struct LightPass {
+    vertices: Vec<LightVertex>,
+    /// Pixel `k`'s path is `vertices[starts[k] .. starts[k + 1]]`.
+    starts: Vec<u32>,
+    grid: HashGrid,
+    merging: MergeWeights,
+    /// 1 / (π r² N): the density estimate's kernel over the path count.
+    normalization: f32,
+    width: u32,
+    /// The light paths' connections to the camera, in pixel order of the
+    /// paths that made them.
+    pub splats: Vec<Splat>,
+    /// Splats dropped for being NaN or infinite.
+    pub discarded: u64,
+}
+
+impl LightPass {
+    /// The light vertices traced for pixel (`x`, `y`).
+    fn path_of(&self, x: u32, y: u32) -> &[LightVertex] {
+        let k = (y * self.width + x) as usize;
+        match (self.starts.get(k), self.starts.get(k + 1)) {
+            (Some(&a), Some(&b)) => &self.vertices[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+
+    /// Light vertices stored this iteration.
+    pub fn vertex_count(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// The merges at a camera vertex (report eqs. 38–39 for the weights),
+    /// without the camera path's throughput: every light vertex within the
+    /// radius whose path, joined at this vertex, has at most `max_depth`
+    /// segments.
+    pub(super) fn merge(
+        &self,
+        surface: &SurfacePoint,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        walk: &Walk,
+        max_depth: u32,
+    ) -> Rgb {
+        let mut sum = Rgb::ZERO;
+        let vc = self.merging.vc;
+        let camera_weight = walk.d_vcm * vc;
+        self.grid.for_each_near(surface.position, |i| {
+            let v = &self.vertices[i as usize];
+            if v.length + walk.length > max_depth {
+                return;
+            }
+            // The light arrived along -v.wo; the camera's BSDF scatters it to wo.
+            let wi = v.wo;
+            let cos = wi.dot(surface.geometric_normal).abs();
+            let f = bsdf.eval(wo, wi);
+            if cos <= 1e-6 || is_black(f) {
+                return;
+            }
+            let (pdf, reverse) = bsdf.pdfs(wo, wi);
+            let w_light = v.d_vcm * vc + v.d_vm * mis(pdf);
+            let w_camera = camera_weight + walk.d_vm * mis(reverse);
+            // `eval` is f · |cos| about the shading normal; the photon's flux
+            // is per unit of geometric area, hence the geometric cosine.
+            sum += v.throughput * f * (1.0 / (cos * (w_light + 1.0 + w_camera)));
+        });
+        sum * self.normalization
+    }
+}

@@ -1,0 +1,220 @@
+//! Vertex connection and merging: where BDPT is complete, VCM must converge
+//! to BDPT's image (merging's bias shrinks with the radius, and the radius
+//! shrinks with the iterations); where only merging can make a path (a
+//! caustic from a point light, seen in a mirror), VCM must show it and
+//! BDPT must not.
+
+use crate::common::{self, assert_agree, block_stats, BlockStats};
+use tracer::settings::{IntegratorKind, Settings};
+
+/// As in the agreement tests: five standard errors over many blocks.
+const Z: f64 = 5.0;
+const SEEDS: u64 = 16;
+const BLOCK: u32 = 8;
+
+fn stats(
+    scene: &tracer::scene::Scene,
+    settings: &Settings,
+    integrator: IntegratorKind,
+    spp: u32,
+) -> BlockStats {
+    let mut settings = settings.clone();
+    settings.integrator = integrator;
+    settings.stop.spp = spp;
+    let s = block_stats(scene, &settings, SEEDS, BLOCK);
+    assert_eq!(s.discarded, 0, "{integrator:?}: NaN or infinite samples");
+    s
+}
+
+/// VCM against BDPT on a bundled scene at 32 × 32, with a merging radius
+/// large enough that merges carry much of the image's weight.
+fn agrees_with_bdpt(scene: &str, radius: f32, spp: u32) {
+    let _guard = common::heavy();
+    let (scene, mut settings) = common::load_scene(common::repo().join(scene));
+    settings.film.width = 32;
+    settings.film.height = 32;
+    settings.vcm_radius = Some(radius);
+    let bdpt = stats(&scene, &settings, IntegratorKind::Bdpt, spp);
+    let vcm = stats(&scene, &settings, IntegratorKind::Vcm, spp);
+    assert_agree(&bdpt, &vcm, Z, "bdpt vs vcm");
+}
+
+#[test]
+fn vcm_agrees_with_bdpt_on_the_cornell_box() {
+    agrees_with_bdpt("scenes/cornell-box.json", 8.0, 8);
+}
+
+#[test]
+fn vcm_agrees_with_bdpt_on_the_caustic_scene() {
+    agrees_with_bdpt("scenes/cornell-caustics.json", 8.0, 16);
+}
+
+/// Inside a closed diffuse sphere with a point light at its centre, every
+/// wall point has radiance 1 (see the furnace tests), and a ball of any
+/// radius centred on the wall cuts a cap of area exactly π r² from it
+/// (Archimedes), so merging has no kernel bias here however wide the
+/// radius. With a wide one, merges carry much of the weight: MIS weights
+/// that do not sum to one show as a wrong brightness.
+#[test]
+fn merging_conserves_energy_in_a_furnace_with_a_wide_radius() {
+    let _guard = common::heavy();
+    let dir = tempfile::tempdir().unwrap();
+    let path = common::write_scene(dir.path(), "furnace.json", FURNACE);
+    let (scene, mut settings) = common::load_scene(path);
+    settings.integrator = IntegratorKind::Vcm;
+    settings.stop.spp = 64;
+    for radius in [0.05, 0.15] {
+        settings.vcm_radius = Some(radius);
+        let s = block_stats(&scene, &settings, 8, 4);
+        assert_eq!(s.discarded, 0);
+        for c in 0..3 {
+            let (m, e) = (s.image_mean[c], s.image_stderr[c]);
+            eprintln!("radius {radius}: image mean {m:.5} ± {e:.5}");
+            assert!(
+                (m - 1.0).abs() <= 5.0 * e + 0.002,
+                "radius {radius}: image mean {m:.5} ± {e:.5}, expected 1"
+            );
+            for (k, (m, e)) in s.mean.iter().zip(&s.stderr).enumerate() {
+                assert!(
+                    (m[c] - 1.0).abs() <= 5.0 * e[c] + 0.002,
+                    "radius {radius}: block {k} mean {:.5} ± {:.5}, expected 1",
+                    m[c],
+                    e[c]
+                );
+            }
+        }
+    }
+}
+
+const FURNACE: &str = r#"{
+  "camera": {"position": [0.1, 0.05, -0.2], "look_at": [0.3, 0.1, 1], "fov": 100},
+  "film": {"width": 16, "height": 16},
+  "render": {"max_depth": 64},
+  "materials": {"half": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}},
+  "objects": [{"type": "sphere", "radius": 1, "subdivisions": 5, "material": "half"}],
+  "lights": [{"type": "point", "position": [0, 0, 0], "intensity": [3.14159265, 3.14159265, 3.14159265]}]
+}"#;
+
+fn render_mirror_caustic(integrator: IntegratorKind) -> tracer::film::Image {
+    let (scene, mut settings) =
+        common::load_scene(common::repo().join("scenes/mirror-caustic.json"));
+    settings.film.width = 64;
+    settings.film.height = 48;
+    settings.stop.spp = 32;
+    settings.integrator = integrator;
+    tracer::render::render(&scene, &settings, &Default::default())
+        .unwrap()
+        .0
+}
+
+/// The channel mean over pixels x0..x1, y0..y1.
+fn box_mean(image: &tracer::film::Image, (x0, x1): (u32, u32), (y0, y1): (u32, u32)) -> f64 {
+    let mut sum = 0.0;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            sum += image.get(x, y).element_sum() as f64 / 3.0;
+        }
+    }
+    sum / ((x1 - x0) * (y1 - y0)) as f64
+}
+
+/// The bundled mirror-caustic scene: a point light's caustic under a glass
+/// sphere is seen directly and in a mirror. Seen directly, BDPT renders it
+/// (light paths splatted to the camera) and VCM agrees; in the mirror, no
+/// connection can make the path (point light, glass, floor, mirror,
+/// camera), so only VCM's merges show it.
+#[test]
+fn only_vcm_shows_the_caustic_in_the_mirror() {
+    let _guard = common::heavy();
+    let bdpt = render_mirror_caustic(IntegratorKind::Bdpt);
+    let vcm = render_mirror_caustic(IntegratorKind::Vcm);
+    // Pixel boxes of the 64 x 48 image around the caustic's reflection
+    // and around the caustic itself.
+    let (mirrored, direct) = (((5, 13), (24, 28)), ((33, 43), (27, 32)));
+    let (b, v) = (
+        box_mean(&bdpt, mirrored.0, mirrored.1),
+        box_mean(&vcm, mirrored.0, mirrored.1),
+    );
+    eprintln!("caustic in the mirror: bdpt {b:.4}, vcm {v:.4}");
+    assert!(
+        v > 4.0 * b,
+        "in the mirror: vcm {v:.4} is not far above bdpt {b:.4}"
+    );
+    let (b, v) = (
+        box_mean(&bdpt, direct.0, direct.1),
+        box_mean(&vcm, direct.0, direct.1),
+    );
+    eprintln!("caustic seen directly: bdpt {b:.4}, vcm {v:.4}");
+    assert!(
+        (v / b - 1.0).abs() < 0.25,
+        "seen directly: vcm {v:.4} against bdpt {b:.4}"
+    );
+}
+
+/// The merges sum over the grid in a fixed order, and the light pass
+/// gathers its rows in order: the same seed gives the same bits on any
+/// number of threads, with a radius wide enough that merges happen.
+#[test]
+fn vcm_images_are_the_same_for_any_thread_count() {
+    let _guard = common::heavy();
+    let (scene, mut settings) =
+        common::load_scene(common::repo().join("scenes/cornell-caustics.json"));
+    settings.film.width = 40;
+    settings.film.height = 36;
+    settings.stop.spp = 4;
+    settings.integrator = IntegratorKind::Vcm;
+    settings.vcm_radius = Some(20.0);
+    let images: Vec<_> = [1, 2, 3]
+        .iter()
+        .map(|&threads| {
+            let options = tracer::render::RenderOptions {
+                threads: Some(threads),
+                ..Default::default()
+            };
+            tracer::render::render(&scene, &settings, &options)
+                .unwrap()
+                .0
+        })
+        .collect();
+    let bits = |i: &tracer::film::Image| {
+        i.pixels
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    assert!(images[0].mean().x > 0.0);
+    assert_eq!(bits(&images[0]), bits(&images[1]), "1 vs 2 threads");
+    assert_eq!(bits(&images[0]), bits(&images[2]), "1 vs 3 threads");
+}
+
+/// The radius follows the global sample index, so a render split into
+/// sample ranges (`--sample-offset`, then `tracer merge`) equals the render
+/// made in one go, merges included.
+#[test]
+fn split_sample_ranges_equal_one_render() {
+    let _guard = common::heavy();
+    let (scene, mut settings) =
+        common::load_scene(common::repo().join("scenes/cornell-caustics.json"));
+    settings.film.width = 32;
+    settings.film.height = 24;
+    settings.integrator = IntegratorKind::Vcm;
+    settings.vcm_radius = Some(20.0);
+    let render = |offset: u32, spp: u32| {
+        let mut s = settings.clone();
+        s.sample_offset = offset;
+        s.stop.spp = spp;
+        tracer::render::render(&scene, &s, &Default::default())
+            .unwrap()
+            .0
+    };
+    let whole = render(0, 8);
+    let (a, b) = (render(0, 4), render(4, 4));
+    for ((p, q), w) in a.pixels.iter().zip(&b.pixels).zip(&whole.pixels) {
+        let merged = (*p + *q) * 0.5;
+        let scale = w.abs().max_element().max(1e-3);
+        assert!(
+            (merged - *w).abs().max_element() <= 1e-5 * scale,
+            "merged {merged} against {w}"
+        );
+    }
+}
