@@ -23,6 +23,7 @@ fn benches(c: &mut Criterion) {
             (IntegratorKind::Pt, "pt", 4),
             (IntegratorKind::Lt, "lt", 2),
             (IntegratorKind::Bdpt, "bdpt", 1),
+            (IntegratorKind::Vcm, "vcm", 1),
         ] {
             let (scene, mut settings) =
                 tracer::scene::load(&root.join(format!("scenes/{name}.json"))).unwrap();

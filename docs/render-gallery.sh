@@ -5,7 +5,8 @@
 # rough-materials scene with BDPT at 256 spp (the light through its rough
 # glass is noisy for path tracing), and the sky scene with path tracing at
 # 512 spp in its own 320 x 200 (it is lit by an image sky, which path
-# tracing samples directly).
+# tracing samples directly), and the mirror-caustic scene with VCM at 256 spp
+# in its own 256 x 192 (only VCM renders its caustic in the mirror).
 #
 #   docs/render-gallery.sh
 set -euo pipefail
@@ -31,3 +32,4 @@ render lights --spp 256 --width 256 --height 256
 render textured --spp 256 --width 256 --height 256
 render rough-materials --spp 256 --integrator bdpt --width 256 --height 256
 render sky-materials --spp 512
+render mirror-caustic --spp 256 --integrator vcm

@@ -165,15 +165,17 @@ impl Integrator {
 
     /// The light pass of sample `index` (see [`Integrator::has_light_pass`]),
     /// run on the current rayon pool; `None` for estimators without one.
+    /// `previous`, a pass no longer needed, lends its buffers.
     pub fn light_pass(
         &self,
         scene: &Scene,
         camera: &Camera,
         seed: u64,
         index: u64,
+        previous: Option<LightPass>,
     ) -> Option<LightPass> {
         match self {
-            Integrator::Vcm(vcm) => Some(vcm.light_pass(scene, camera, seed, index)),
+            Integrator::Vcm(vcm) => Some(vcm.light_pass(scene, camera, seed, index, previous)),
             _ => None,
         }
     }

@@ -115,11 +115,11 @@ impl Accumulation {
     /// pixel of the image.
     pub(super) fn add_light_pass(&mut self, pass: &LightPass, index: u32) {
         let half = (index % 2) as usize;
-        for splat in &pass.splats {
+        for splat in pass.splats() {
             self.splat_sums[half][splat.pixel as usize] += splat.value.as_dvec3();
         }
         self.light_paths[half] += self.full_pixels;
-        self.light_pass_discarded += pass.discarded;
+        self.light_pass_discarded += pass.discarded();
     }
 
     /// The image over the crop, each pixel divided by the samples it got.

@@ -49,6 +49,7 @@ impl Pass<'_> {
             self.run_tiles(pool, acc, skip, None);
             return;
         }
+        let mut previous = None;
         for index in self.first..self.first + self.count {
             // An iteration not begun is not begun at all: no light paths
             // without the camera paths that need them.
@@ -56,8 +57,13 @@ impl Pass<'_> {
                 return;
             }
             let light = pool.install(|| {
-                self.integrator
-                    .light_pass(self.scene, self.camera, self.seed, index as u64)
+                self.integrator.light_pass(
+                    self.scene,
+                    self.camera,
+                    self.seed,
+                    index as u64,
+                    previous.take(),
+                )
             });
             if let Some(light) = &light {
                 acc.add_light_pass(light, index);
@@ -68,6 +74,7 @@ impl Pass<'_> {
                 ..*self
             };
             iteration.run_tiles(pool, acc, skip, light.as_ref());
+            previous = light;
         }
     }
 

@@ -32,7 +32,7 @@ use crate::geometry::SurfacePoint;
 use crate::material::Bsdf;
 use crate::scene::Scene;
 use glam::Vec3;
-use grid::HashGrid;
+use grid::{HashGrid, Located};
 use rayon::prelude::*;
 
 /// How fast the merging radius shrinks: r_i ∝ i^((α − 1)/2). 3/4 is the
@@ -72,57 +72,52 @@ impl VertexMerging {
 
     /// The light pass of iteration `index`: one light path per pixel of
     /// `camera`'s image, traced in parallel on the current rayon pool, row
-    /// by row, and gathered in pixel order.
-    pub fn light_pass(&self, scene: &Scene, camera: &Camera, seed: u64, index: u64) -> LightPass {
+    /// by row, and gathered in pixel order. `previous`, a pass no longer
+    /// needed, lends its buffers.
+    pub fn light_pass(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        seed: u64,
+        index: u64,
+        previous: Option<LightPass>,
+    ) -> LightPass {
         let radius = self.radius_at(scene, index);
         let paths = light_paths_per_pass(camera);
         let merging = MergeWeights::new(radius, paths);
         let bdpt = Bidirectional {
             max_depth: self.max_depth,
         };
-        let width = camera.width();
-        let rows: Vec<(Vec<LightVertex>, Vec<u32>, SampleSink)> = (0..camera.height())
-            .into_par_iter()
-            .map(|y| {
-                let mut vertices = Vec::new();
-                let mut ends = Vec::with_capacity(width as usize);
-                let mut sink = SampleSink::default();
-                for x in 0..width {
-                    let pixel = PixelSample::new(x, y, index, seed);
-                    bdpt.trace_light_path(
-                        scene,
-                        camera,
-                        &mut pixel.light_sampler(),
-                        merging,
-                        &mut vertices,
-                        &mut sink,
-                    );
-                    ends.push(vertices.len() as u32);
-                }
-                (vertices, ends, sink)
-            })
-            .collect();
-        let total: usize = rows.iter().map(|r| r.0.len()).sum();
-        let mut pass = LightPass {
-            vertices: Vec::with_capacity(total),
-            starts: Vec::with_capacity(rows.len() * width as usize + 1),
-            grid: HashGrid::build(&[], radius),
-            merging,
-            normalization: 1.0 / (std::f32::consts::PI * radius * radius * paths),
-            width,
-            splats: Vec::new(),
-            discarded: 0,
-        };
-        pass.starts.push(0);
-        for (vertices, ends, sink) in rows {
-            let offset = pass.vertices.len() as u32;
-            pass.starts.extend(ends.iter().map(|e| e + offset));
-            pass.vertices.extend(vertices);
-            pass.splats.extend(sink.splats);
-            pass.discarded += sink.discarded;
+        let (width, height) = (camera.width(), camera.height());
+        let mut pass = previous.unwrap_or_default();
+        pass.rows.resize_with(height as usize, Row::default);
+        pass.rows.par_iter_mut().enumerate().for_each(|(y, row)| {
+            row.vertices.clear();
+            row.ends.clear();
+            row.sink.splats.clear();
+            row.sink.discarded = 0;
+            for x in 0..width {
+                let pixel = PixelSample::new(x, y as u32, index, seed);
+                bdpt.trace_light_path(
+                    scene,
+                    camera,
+                    &mut pixel.light_sampler(),
+                    merging,
+                    &mut row.vertices,
+                    &mut row.sink,
+                );
+                row.ends.push(row.vertices.len() as u32);
+            }
+        });
+        pass.points.clear();
+        for row in &pass.rows {
+            pass.points
+                .extend(row.vertices.iter().map(MergePoint::from));
         }
-        let positions: Vec<Vec3> = pass.vertices.iter().map(|v| v.surface.position).collect();
-        pass.grid = HashGrid::build(&positions, radius);
+        pass.grid.rebuild(&pass.points, radius);
+        pass.merging = merging;
+        pass.normalization = 1.0 / (std::f32::consts::PI * radius * radius * paths);
+        pass.width = width;
         pass
     }
 
@@ -154,34 +149,103 @@ impl VertexMerging {
 /// vertices (for connections, each pixel its own path, and for merging,
 /// all of them through the grid) and their splats into the image.
 pub struct LightPass {
-    vertices: Vec<LightVertex>,
-    /// Pixel `k`'s path is `vertices[starts[k] .. starts[k + 1]]`.
-    starts: Vec<u32>,
-    grid: HashGrid,
+    /// The light paths of each row of pixels.
+    rows: Vec<Row>,
+    /// What merging needs of every light vertex, in row order.
+    points: Vec<MergePoint>,
+    grid: HashGrid<MergePoint>,
     merging: MergeWeights,
     /// 1 / (π r² N): the density estimate's kernel over the path count.
     normalization: f32,
     width: u32,
-    /// The light paths' connections to the camera, in pixel order of the
-    /// paths that made them.
-    pub splats: Vec<Splat>,
-    /// Splats dropped for being NaN or infinite.
-    pub discarded: u64,
+}
+
+impl Default for LightPass {
+    fn default() -> Self {
+        LightPass {
+            rows: Vec::new(),
+            points: Vec::new(),
+            grid: HashGrid::new(),
+            merging: MergeWeights::NONE,
+            normalization: 0.0,
+            width: 0,
+        }
+    }
+}
+
+/// One row of pixels' light paths, one after the other.
+#[derive(Default)]
+struct Row {
+    vertices: Vec<LightVertex>,
+    /// Pixel `x`'s path ends at `vertices[ends[x]]` and starts where pixel
+    /// `x − 1`'s ends.
+    ends: Vec<u32>,
+    /// The paths' connections to the camera.
+    sink: SampleSink,
+}
+
+/// A light vertex as merging sees it: a third the size of a
+/// [`LightVertex`], so the grid's buckets stay small.
+#[derive(Clone, Copy, Debug, Default)]
+struct MergePoint {
+    position: Vec3,
+    /// Unit direction towards the previous vertex (where the light came from).
+    wo: Vec3,
+    throughput: Rgb,
+    d_vcm: f32,
+    d_vm: f32,
+    /// Segments from the light to this vertex.
+    length: u32,
+}
+
+impl From<&LightVertex> for MergePoint {
+    fn from(v: &LightVertex) -> MergePoint {
+        MergePoint {
+            position: v.surface.position,
+            wo: v.wo,
+            throughput: v.throughput,
+            d_vcm: v.d_vcm,
+            d_vm: v.d_vm,
+            length: v.length,
+        }
+    }
+}
+
+impl Located for MergePoint {
+    fn position(&self) -> Vec3 {
+        self.position
+    }
 }
 
 impl LightPass {
     /// The light vertices traced for pixel (`x`, `y`).
     fn path_of(&self, x: u32, y: u32) -> &[LightVertex] {
-        let k = (y * self.width + x) as usize;
-        match (self.starts.get(k), self.starts.get(k + 1)) {
-            (Some(&a), Some(&b)) => &self.vertices[a as usize..b as usize],
-            _ => &[],
-        }
+        let Some(row) = self.rows.get(y as usize) else {
+            return &[];
+        };
+        let start = if x == 0 {
+            0
+        } else {
+            row.ends.get(x as usize - 1).copied().unwrap_or(0)
+        };
+        let end = row.ends.get(x as usize).copied().unwrap_or(start);
+        &row.vertices[start as usize..end as usize]
+    }
+
+    /// The light paths' connections to the camera, in pixel order of the
+    /// paths that made them.
+    pub fn splats(&self) -> impl Iterator<Item = &Splat> {
+        self.rows.iter().flat_map(|r| &r.sink.splats)
+    }
+
+    /// Splats dropped for being NaN or infinite.
+    pub fn discarded(&self) -> u64 {
+        self.rows.iter().map(|r| r.sink.discarded).sum()
     }
 
     /// Light vertices stored this iteration.
     pub fn vertex_count(&self) -> usize {
-        self.vertices.len()
+        self.points.len()
     }
 
     /// The merges at a camera vertex (report eqs. 38–39 for the weights),
@@ -199,8 +263,7 @@ impl LightPass {
         let mut sum = Rgb::ZERO;
         let vc = self.merging.vc;
         let camera_weight = walk.d_vcm * vc;
-        self.grid.for_each_near(surface.position, |i| {
-            let v = &self.vertices[i as usize];
+        self.grid.for_each_near(surface.position, |v| {
             if v.length + walk.length > max_depth {
                 return;
             }
@@ -219,5 +282,23 @@ impl LightPass {
             sum += v.throughput * f * (1.0 / (cos * (w_light + 1.0 + w_camera)));
         });
         sum * self.normalization
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The grid holds its own small copy of each light vertex, so that a
+    /// bucket of merge candidates spans few cache lines.
+    #[test]
+    fn a_merge_point_is_a_third_of_a_light_vertex_or_less() {
+        let (point, vertex) = (
+            std::mem::size_of::<MergePoint>(),
+            std::mem::size_of::<LightVertex>(),
+        );
+        eprintln!("merge point {point} bytes, light vertex {vertex} bytes");
+        assert!(point <= 48, "{point}");
+        assert!(3 * point <= vertex, "{point} against {vertex}");
     }
 }
