@@ -327,6 +327,17 @@ impl Settings {
                     format!("expected a number greater than zero, found {r}"),
                 );
             }
+            let paths = self.film.width as f32 * self.film.height as f32;
+            let (lowest, highest) = crate::integrator::radius_limits(paths);
+            if !(lowest..=highest).contains(&r) {
+                return invalid(
+                    Setting::VcmRadius,
+                    format!(
+                        "{r} is outside {lowest:e} to {highest:e}, the radii whose merges a {} x {} image can normalise",
+                        self.film.width, self.film.height
+                    ),
+                );
+            }
         }
         Ok(())
     }

@@ -149,6 +149,11 @@ fn check_part(p: &Part, first: &Part) -> Result<()> {
         ),
         ("the seed", m.seed.to_string(), m0.seed.to_string()),
         (
+            "the VCM radius",
+            format!("{:?}", m.vcm_radius),
+            format!("{:?}", m0.vcm_radius),
+        ),
+        (
             "the maximum depth",
             m.max_depth.to_string(),
             m0.max_depth.to_string(),

@@ -242,6 +242,7 @@ fn metadata(s: &Settings, hash: &str, stats: &RenderStats, done: bool) -> Metada
         program: program(),
         scene_hash: hash.to_string(),
         integrator: s.integrator.name().into(),
+        vcm_radius: s.vcm_radius.filter(|_| s.integrator == IntegratorKind::Vcm),
         seed: s.seed,
         max_depth: s.max_depth,
         width: s.film.width,

@@ -16,8 +16,12 @@ pub struct Metadata {
     pub program: String,
     /// BLAKE3 of the scene's geometry inputs, camera, materials and lights.
     pub scene_hash: String,
-    /// The integrator's name: `pt`, `lt` or `bdpt`.
+    /// The integrator's name: `pt`, `lt`, `bdpt` or `vcm`.
     pub integrator: String,
+    /// VCM's merging radius as set (`vcm_radius`); `None` for the default,
+    /// which follows from the scene, and for the other integrators.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vcm_radius: Option<f32>,
     /// The seed every sample was drawn from.
     pub seed: u64,
     /// The most path segments a path could have.
@@ -109,6 +113,9 @@ impl Metadata {
         if let Some(n) = self.noise {
             out.push(("noise", A::F64(n)));
         }
+        if let Some(r) = self.vcm_radius {
+            out.push(("vcmRadius", A::F32(r)));
+        }
         out.into_iter()
             .map(|(k, v)| (format!("{PREFIX}{k}"), v))
             .collect()
@@ -160,6 +167,11 @@ impl Metadata {
             program: text("program")?,
             scene_hash: text("sceneHash")?,
             integrator: text("integrator")?,
+            vcm_radius: match get("vcmRadius") {
+                Ok(A::F32(r)) => Some(*r),
+                Ok(_) => return Err(format!("{PREFIX}vcmRadius is not a number")),
+                Err(_) => None,
+            },
             seed: text("seed")?
                 .parse()
                 .map_err(|_| format!("{PREFIX}seed is not an integer"))?,

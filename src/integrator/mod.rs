@@ -22,7 +22,7 @@ pub use bdpt::Bidirectional;
 pub use lt::LightTracer;
 pub use pt::PathTracer;
 pub use sink::{SampleSink, StrategySample};
-pub use vcm::{LightPass, VertexMerging, DEFAULT_RADIUS_FRACTION, RADIUS_ALPHA};
+pub use vcm::{radius_limits, LightPass, VertexMerging, DEFAULT_RADIUS_FRACTION, RADIUS_ALPHA};
 
 use crate::camera::Camera;
 use crate::color::Rgb;

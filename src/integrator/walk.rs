@@ -73,8 +73,11 @@ impl MergeWeights {
     pub const NONE: MergeWeights = MergeWeights { vm: 0.0, vc: 0.0 };
 
     /// Merging within `radius` of a vertex, among `light_paths` paths.
+    /// η is kept within 1e±18, so that neither constant overflows: the
+    /// weights stay a partition of one whatever the radius.
     pub fn new(radius: f32, light_paths: f32) -> MergeWeights {
-        let eta = std::f32::consts::PI * radius * radius * light_paths;
+        let eta = (std::f64::consts::PI * (radius as f64).powi(2) * light_paths as f64)
+            .clamp(1e-18, 1e18) as f32;
         MergeWeights {
             vm: mis(eta),
             vc: mis(1.0 / eta),

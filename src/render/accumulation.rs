@@ -64,7 +64,9 @@ impl Accumulation {
         Accumulation {
             width,
             crop: settings.crop_or_full(),
-            tiles: tiles::split(traced_area(settings, splatting)),
+            // VCM's camera paths splat nothing: only its light pass, which
+            // covers the whole image anyway, lights other pixels.
+            tiles: tiles::split(traced_area(settings, splatting && !light_pass)),
             splatting,
             splat_sums: splat_buffers(full_pixels, splatting),
             light_paths: [0, 0],

@@ -65,6 +65,11 @@ impl Pass<'_> {
                     previous.take(),
                 )
             });
+            // Stopped while the light pass ran: drop it, or the image would
+            // hold one more iteration of light paths than of camera paths.
+            if skip() {
+                return;
+            }
             if let Some(light) = &light {
                 acc.add_light_pass(light, index);
             }

@@ -28,15 +28,15 @@ fn stats(
 
 /// VCM against BDPT on a bundled scene at 32 × 32, with a merging radius
 /// large enough that merges carry much of the image's weight.
-fn agrees_with_bdpt(scene: &str, radius: f32, spp: u32) {
+fn agrees_with_bdpt(path: &str, radius: f32, spp: u32) {
     let _guard = common::heavy();
-    let (scene, mut settings) = common::load_scene(common::repo().join(scene));
+    let (scene, mut settings) = common::load_scene(common::repo().join(path));
     settings.film.width = 32;
     settings.film.height = 32;
     settings.vcm_radius = Some(radius);
     let bdpt = stats(&scene, &settings, IntegratorKind::Bdpt, spp);
     let vcm = stats(&scene, &settings, IntegratorKind::Vcm, spp);
-    assert_agree(&bdpt, &vcm, Z, "bdpt vs vcm");
+    assert_agree(&bdpt, &vcm, Z, &format!("{path}: bdpt vs vcm"));
 }
 
 #[test]
@@ -217,4 +217,95 @@ fn split_sample_ranges_equal_one_render() {
             "merged {merged} against {w}"
         );
     }
+}
+
+/// Every material and light kind under merging: rough conductors, rough
+/// glass and a thin lens (rough-materials), and an image sky with plastic
+/// (sky-materials), each with a radius of 2% of the scene's size so that
+/// merges carry weight.
+#[test]
+fn vcm_agrees_with_bdpt_on_the_rough_and_sky_scenes() {
+    for (path, spp) in [
+        ("scenes/rough-materials.json", 8),
+        ("scenes/sky-materials.json", 16),
+    ] {
+        let (scene, _) = common::load_scene(common::repo().join(path));
+        let radius = 0.02 * scene.bounds.bounding_sphere().1;
+        agrees_with_bdpt(path, radius, spp);
+    }
+}
+
+/// Parts rendered with different merging radii are not one render:
+/// `tracer merge` refuses them, naming the radius; a radius whose merges
+/// an image cannot normalise is refused before rendering, naming the flag.
+#[test]
+fn merge_refuses_parts_of_different_radii_and_render_refuses_absurd_ones() {
+    use crate::common::{output_text, run, tracer};
+    let dir = tempfile::tempdir().unwrap();
+    let part = |name: &str, offset: &str, radius: &str| {
+        let out = dir.path().join(name);
+        run(&[
+            "render",
+            "scenes/cornell-box.json",
+            "--integrator",
+            "vcm",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--sample-offset",
+            offset,
+            "--vcm-radius",
+            radius,
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        out
+    };
+    let (a, b, c) = (
+        part("a.exr", "0", "5"),
+        part("b.exr", "2", "5"),
+        part("c.exr", "2", "6"),
+    );
+    let merged = dir.path().join("merged.exr");
+    let ok = tracer()
+        .args(["merge", a.to_str().unwrap(), b.to_str().unwrap(), "-o"])
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert!(ok.status.success(), "{}", output_text(&ok));
+    let refused = tracer()
+        .args(["merge", a.to_str().unwrap(), c.to_str().unwrap(), "-o"])
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+    assert!(
+        output_text(&refused).contains("VCM radius"),
+        "{}",
+        output_text(&refused)
+    );
+    let absurd = tracer()
+        .args([
+            "render",
+            "scenes/cornell-box.json",
+            "--integrator",
+            "vcm",
+            "--vcm-radius",
+            "1e-30",
+            "-q",
+            "-o",
+        ])
+        .arg(dir.path().join("absurd.exr"))
+        .output()
+        .unwrap();
+    assert!(!absurd.status.success());
+    assert!(
+        output_text(&absurd).contains("--vcm-radius"),
+        "{}",
+        output_text(&absurd)
+    );
 }

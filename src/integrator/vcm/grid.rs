@@ -15,7 +15,7 @@
 //! small and stored bucket by bucket, so a visited bucket costs one miss.
 //! Its buffers are kept from one build to the next.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 /// Something with a position, that a grid can hold.
@@ -25,9 +25,11 @@ pub trait Located: Copy + Default + Send + Sync {
 
 /// Points gathered by hashed cell.
 pub struct HashGrid<T> {
-    origin: Vec3,
+    /// Cells are found in double precision: a small radius in a large
+    /// scene puts cell coordinates beyond what an f32 resolves.
+    origin: DVec3,
     /// 1 / cell edge.
-    inverse_cell: f32,
+    inverse_cell: f64,
     radius2: f32,
     /// Bucket count − 1 (a power of two less one).
     mask: u64,
@@ -46,7 +48,7 @@ impl<T: Located> HashGrid<T> {
     /// An empty grid.
     pub fn new() -> HashGrid<T> {
         HashGrid {
-            origin: Vec3::ZERO,
+            origin: DVec3::ZERO,
             inverse_cell: 1.0,
             radius2: 0.0,
             mask: 0,
@@ -66,11 +68,11 @@ impl<T: Located> HashGrid<T> {
             .iter()
             .fold(Vec3::splat(f32::INFINITY), |m, p| m.min(p.position()));
         self.origin = if origin.is_finite() {
-            origin
+            origin.as_dvec3()
         } else {
-            Vec3::ZERO
+            DVec3::ZERO
         };
-        self.inverse_cell = 1.0 / (2.0 * radius);
+        self.inverse_cell = 1.0 / (2.0 * radius as f64);
         self.radius2 = radius * radius;
         let buckets = (2 * n).max(64).next_power_of_two();
         self.mask = buckets as u64 - 1;
@@ -106,8 +108,8 @@ impl<T: Located> HashGrid<T> {
     }
 
     /// The cell coordinates of `p`, relative to the grid's origin.
-    fn cell_of(&self, p: Vec3) -> Vec3 {
-        (p - self.origin) * self.inverse_cell
+    fn cell_of(&self, p: Vec3) -> DVec3 {
+        (p.as_dvec3() - self.origin) * self.inverse_cell
     }
 
     fn cell(&self, p: Vec3) -> [i64; 3] {
@@ -139,7 +141,8 @@ impl<T: Located> HashGrid<T> {
         let step = [frac.x, frac.y, frac.z].map(|f| if f < 0.5 { -1 } else { 1 });
         let mut seen = [u32::MAX; 8];
         for corner in 0..8usize {
-            let cell = [0, 1, 2].map(|a| base[a] + if corner >> a & 1 == 1 { step[a] } else { 0 });
+            let cell = [0, 1, 2]
+                .map(|a| base[a].wrapping_add(if corner >> a & 1 == 1 { step[a] } else { 0 }));
             let b = self.bucket(cell);
             // Two cells may share a bucket: visit its points once.
             if self.occupied[b as usize / 64] & (1 << (b % 64)) == 0 || seen[..corner].contains(&b)

@@ -82,8 +82,10 @@ impl VertexMerging {
         index: u64,
         previous: Option<LightPass>,
     ) -> LightPass {
-        let radius = self.radius_at(scene, index);
         let paths = light_paths_per_pass(camera);
+        // Keep the kernel π r² N a normal f32, whatever the scene's scale.
+        let (lowest, highest) = radius_limits(paths);
+        let radius = self.radius_at(scene, index).clamp(lowest, highest);
         let merging = MergeWeights::new(radius, paths);
         let bdpt = Bidirectional {
             max_depth: self.max_depth,
@@ -98,7 +100,7 @@ impl VertexMerging {
             row.sink.discarded = 0;
             for x in 0..width {
                 let pixel = PixelSample::new(x, y as u32, index, seed);
-                bdpt.trace_light_path(
+                bdpt.trace_light_path::<true>(
                     scene,
                     camera,
                     &mut pixel.light_sampler(),
@@ -116,8 +118,8 @@ impl VertexMerging {
         }
         pass.grid.rebuild(&pass.points, radius);
         pass.merging = merging;
-        pass.normalization = 1.0 / (std::f32::consts::PI * radius * radius * paths);
-        pass.width = width;
+        let kernel = std::f64::consts::PI * (radius as f64).powi(2) * paths as f64;
+        pass.normalization = (1.0 / kernel) as f32;
         pass
     }
 
@@ -141,8 +143,16 @@ impl VertexMerging {
             max_depth: self.max_depth,
         };
         let own = pass.path_of(pixel.x, pixel.y);
-        bdpt.trace_camera_path(scene, walk, &mut sampler, own, Some(pass), index, sink)
+        bdpt.trace_camera_path::<true>(scene, walk, &mut sampler, own, Some(pass), index, sink)
     }
+}
+
+/// The merging radii whose kernel area π r² N, over `light_paths` paths,
+/// lies within 1e±30: below, the density estimate's normalisation would
+/// overflow; above, the kernel would.
+pub fn radius_limits(light_paths: f32) -> (f32, f32) {
+    let area = std::f64::consts::PI * light_paths.max(1.0) as f64;
+    ((1e-30 / area).sqrt() as f32, (1e30 / area).sqrt() as f32)
 }
 
 /// What one iteration's light paths leave for its camera paths: their
@@ -157,7 +167,6 @@ pub struct LightPass {
     merging: MergeWeights,
     /// 1 / (π r² N): the density estimate's kernel over the path count.
     normalization: f32,
-    width: u32,
 }
 
 impl Default for LightPass {
@@ -168,7 +177,6 @@ impl Default for LightPass {
             grid: HashGrid::new(),
             merging: MergeWeights::NONE,
             normalization: 0.0,
-            width: 0,
         }
     }
 }
@@ -251,7 +259,9 @@ impl LightPass {
     /// The merges at a camera vertex (report eqs. 38–39 for the weights),
     /// without the camera path's throughput: every light vertex within the
     /// radius whose path, joined at this vertex, has at most `max_depth`
-    /// segments.
+    /// segments. Kept out of line: it is large, and runs at most once per
+    /// camera vertex.
+    #[inline(never)]
     pub(super) fn merge(
         &self,
         surface: &SurfacePoint,

@@ -82,6 +82,7 @@ pub fn metadata(width: u32, height: u32, spp: u32) -> tracer::film::metadata::Me
         program: "tracer test".into(),
         scene_hash: "0".repeat(64),
         integrator: "pt".into(),
+        vcm_radius: None,
         seed: 1,
         max_depth: 4,
         width,
