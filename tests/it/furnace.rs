@@ -99,6 +99,29 @@ fn emissive_furnace_sees_radiance_two() {
     }
 }
 
+/// VCM in the point-light furnace at 16 × 16 with wide merging radii (0.05
+/// and 0.15 on the unit sphere): merges carry much of the weight, and the
+/// kernel has no bias here however wide it is, since a ball centred on a
+/// sphere cuts a cap of area exactly π r² from it (Archimedes). MIS
+/// weights that do not sum to one show as a wrong brightness.
+#[test]
+fn vcm_merging_conserves_energy_with_a_wide_radius() {
+    let _guard = common::heavy();
+    for radius in ["0.05", "0.15"] {
+        let json = POINT_FURNACE
+            .replace(
+                r#""film": {"width": 8, "height": 8}"#,
+                r#""film": {"width": 16, "height": 16}"#,
+            )
+            .replace(
+                r#""render": {"max_depth": 64}"#,
+                &format!(r#""render": {{"max_depth": 64, "vcm_radius": {radius}}}"#),
+            );
+        assert!(json.contains("vcm_radius") && json.contains(r#""width": 16"#));
+        check(&json, IntegratorKind::Vcm, 64, 1.0, 0.002);
+    }
+}
+
 /// A white diffuse sphere (albedo 1) and a perfect mirror sphere under a
 /// constant white sky: radiance 1 leaves every point in every direction,
 /// so every pixel, sky or sphere, is 1. Exercises escaped rays, sky

@@ -67,7 +67,7 @@ impl VertexMerging {
     pub fn radius_at(&self, scene: &Scene, index: u64) -> f32 {
         let iteration = (index + 1) as f64;
         let shrink = iteration.powf((RADIUS_ALPHA - 1.0) / 2.0);
-        (self.base_radius(scene) as f64 * shrink).max(1e-30) as f32
+        (self.base_radius(scene) as f64 * shrink) as f32
     }
 
     /// The light pass of iteration `index`: one light path per pixel of
@@ -249,11 +249,6 @@ impl LightPass {
     /// Splats dropped for being NaN or infinite.
     pub fn discarded(&self) -> u64 {
         self.rows.iter().map(|r| r.sink.discarded).sum()
-    }
-
-    /// Light vertices stored this iteration.
-    pub fn vertex_count(&self) -> usize {
-        self.points.len()
     }
 
     /// The merges at a camera vertex (report eqs. 38–39 for the weights),
