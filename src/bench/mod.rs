@@ -109,11 +109,11 @@ pub struct BenchReport {
     pub triangles: usize,
     /// One build per thread count asked for.
     pub builds: Vec<BuildFigures>,
-    /// SAH cost of the 4-wide BVH (see [`crate::bvh::wide::BuildReport`]).
+    /// SAH cost of the 8-wide BVH (see [`crate::bvh::wide::BuildReport`]).
     pub sah_cost: f32,
     /// SAH cost of the binary BVH before the collapse.
     pub binary_sah_cost: f32,
-    /// 4-wide inner nodes.
+    /// 8-wide inner nodes.
     pub nodes: usize,
     /// Leaf blocks (up to four triangles each).
     pub leaves: usize,
@@ -319,8 +319,8 @@ impl BenchReport {
         }
         let _ = writeln!(
             s,
-            "bvh        4-wide: SAH cost {:.2} (binary before collapse {:.2}), {} nodes, {} leaves, {:.1} bytes/triangle",
-            self.sah_cost, self.binary_sah_cost, self.nodes, self.leaves, self.bytes_per_triangle
+            "bvh        {}-wide: SAH cost {:.2} (binary before collapse {:.2}), {} nodes, {} leaves, {:.1} bytes/triangle",
+            crate::bvh::wide::WIDTH, self.sah_cost, self.binary_sah_cost, self.nodes, self.leaves, self.bytes_per_triangle
         );
         let _ = writeln!(
             s,

@@ -46,7 +46,8 @@ pub fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
     }
     let r = scene.bvh.report();
     println!(
-        "bvh:        4-wide, {} nodes, {} leaves, SAH cost {:.2} (binary {:.2}), {} bytes, {}",
+        "bvh:        {}-wide, {} nodes, {} leaves, SAH cost {:.2} (binary {:.2}), {} bytes, {}",
+        tracer::bvh::wide::WIDTH,
         r.nodes,
         r.leaves,
         r.sah_cost,

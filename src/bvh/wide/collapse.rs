@@ -1,25 +1,36 @@
-//! Turns the binary SAH BVH into the 4-wide one. Each wide node starts from a
+//! Turns the binary SAH BVH into the 8-wide one. Each wide node starts from a
 //! binary node's two children and repeatedly opens the child with the largest
 //! surface area (the one a random ray is most likely to enter) until it has
-//! four, the greedy collapse of Wald, Benthin and Boulos, "Getting Rid of
+//! eight, the greedy collapse of Wald, Benthin and Boulos, "Getting Rid of
 //! Packets" (2008). Any binary subtree of at most four triangles becomes one
 //! leaf block: testing four triangles costs one SIMD test, less than a node.
 
 use super::{
-    BuildReport, Node4, TriangleBlock, WideBvh, EMPTY_CHILD, LEAF_BIT, LEAF_COUNT_SHIFT,
-    LEAF_INDEX_MASK,
+    BuildReport, TriangleBlock, WideBvh, WideNode, EMPTY_CHILD, LEAF_BIT, LEAF_COUNT_SHIFT,
+    LEAF_INDEX_MASK, WIDTH,
 };
 use crate::bvh::Node;
 use crate::geometry::{Aabb, Triangle};
 
-const EMPTY_BOUNDS: [[f32; 4]; 6] = [
-    [f32::INFINITY; 4],
-    [f32::INFINITY; 4],
-    [f32::INFINITY; 4],
-    [f32::NEG_INFINITY; 4],
-    [f32::NEG_INFINITY; 4],
-    [f32::NEG_INFINITY; 4],
+const EMPTY_BOUNDS: [[f32; WIDTH]; 6] = [
+    [f32::INFINITY; WIDTH],
+    [f32::INFINITY; WIDTH],
+    [f32::INFINITY; WIDTH],
+    [f32::NEG_INFINITY; WIDTH],
+    [f32::NEG_INFINITY; WIDTH],
+    [f32::NEG_INFINITY; WIDTH],
 ];
+
+/// Binary subtrees of at most this many triangles are collapsed as one
+/// task: small enough that a big mesh gives every thread many, large
+/// enough that the sequential top above them is a few hundred nodes.
+const TASK_TRIANGLES: u32 = 4096;
+
+/// Leaf blocks are filled in chunks of this many, a task each.
+const BLOCK_CHUNK: usize = 4096;
+/// How many blocks ahead the fill asks for triangles: far enough to hide a
+/// cache miss behind the blocks in between.
+const PREFETCH_BLOCKS: usize = 8;
 
 struct Collapser<'a> {
     binary: &'a [Node],
@@ -28,28 +39,33 @@ struct Collapser<'a> {
     order: &'a [u32],
     /// Per binary node: (first triangle in leaf order, triangle count) of its subtree.
     ranges: Vec<(u32, u32)>,
-    nodes: Vec<Node4>,
-    blocks: Vec<TriangleBlock>,
 }
 
 impl WideBvh {
+    /// Collapses the binary tree in parallel without moving a node twice.
+    /// The top of the wide tree, down to binary subtrees of at most
+    /// `TASK_TRIANGLES`, comes first; each such subtree is a task whose
+    /// nodes and blocks follow, task after task. A dry run counts what each
+    /// part emits, so every task then writes straight into its own stretch
+    /// of the final arrays; the tasks note which binary leaf each block
+    /// comes from, and one flat parallel pass fills the blocks. The layout
+    /// depends on the tree alone, never on the thread count.
     pub(in crate::bvh) fn collapse(
         binary: &[Node],
         order: &[u32],
         triangles: &[Triangle],
+        parallel: bool,
     ) -> WideBvh {
-        let mut c = Collapser {
+        let c = Collapser {
             binary,
             triangles,
             order,
             ranges: subtree_ranges(binary),
-            nodes: Vec::with_capacity(binary.len() / 3 + 1),
-            blocks: Vec::with_capacity(order.len() / 3 + 1),
         };
-        let root = if binary.is_empty() {
-            EMPTY_CHILD
+        let (root, nodes, blocks) = if binary.is_empty() {
+            (EMPTY_CHILD, Vec::new(), Vec::new())
         } else {
-            c.emit(0)
+            c.collapse_all(parallel)
         };
         let bounds = binary.first().map_or(Aabb::EMPTY, |n| n.bounds);
         let mut wide = WideBvh {
@@ -57,13 +73,13 @@ impl WideBvh {
             bounds,
             report: BuildReport {
                 binary_sah_cost: crate::bvh::sah_cost(binary),
-                nodes: c.nodes.len(),
-                leaves: c.blocks.len(),
+                nodes: nodes.len(),
+                leaves: blocks.len(),
                 triangles: order.len(),
                 ..BuildReport::default()
             },
-            nodes: c.nodes.into(),
-            blocks: c.blocks.into(),
+            nodes: nodes.into(),
+            blocks: blocks.into(),
         };
         wide.report.sah_cost = wide.sah_cost();
         wide
@@ -78,7 +94,7 @@ impl WideBvh {
         }
         let mut total = root_area; // the root's test
         for node in &self.nodes {
-            for lane in 0..4 {
+            for lane in 0..WIDTH {
                 if node.children[lane] == EMPTY_CHILD {
                     continue;
                 }
@@ -110,21 +126,202 @@ fn subtree_ranges(nodes: &[Node]) -> Vec<(u32, u32)> {
     ranges
 }
 
+/// Where an emission goes: a dry run that only counts, or a stretch of the
+/// final arrays whose first entries are nodes `node_base` and blocks
+/// `block_base` overall.
+trait Sink {
+    /// Appends an inner node with no children yet; returns its global index.
+    fn node(&mut self) -> u32;
+    /// Sets child `lane` of the node with global index `node`.
+    fn set_child(&mut self, node: u32, lane: usize, reference: u32, bounds: Aabb);
+    /// Appends a leaf block for binary node `leaf`; returns its global index.
+    fn block(&mut self, leaf: usize) -> u32;
+}
+
+#[derive(Clone, Copy, Default)]
+struct Count {
+    nodes: usize,
+    blocks: usize,
+}
+
+impl Sink for Count {
+    fn node(&mut self) -> u32 {
+        self.nodes += 1;
+        (self.nodes - 1) as u32
+    }
+    fn set_child(&mut self, _: u32, _: usize, _: u32, _: Aabb) {}
+    fn block(&mut self, _: usize) -> u32 {
+        self.blocks += 1;
+        (self.blocks - 1) as u32
+    }
+}
+
+struct Stretch<'a> {
+    nodes: &'a mut [WideNode],
+    /// The binary node each block is made from, in block order.
+    leaves: &'a mut [u32],
+    node_base: usize,
+    block_base: usize,
+    next_node: usize,
+    next_block: usize,
+}
+
+impl<'a> Stretch<'a> {
+    fn new(nodes: &'a mut [WideNode], leaves: &'a mut [u32], at: Count) -> Self {
+        Stretch {
+            nodes,
+            leaves,
+            node_base: at.nodes,
+            block_base: at.blocks,
+            next_node: 0,
+            next_block: 0,
+        }
+    }
+}
+
+impl Sink for Stretch<'_> {
+    fn node(&mut self) -> u32 {
+        self.nodes[self.next_node] = WideNode {
+            bounds: EMPTY_BOUNDS,
+            children: [EMPTY_CHILD; WIDTH],
+        };
+        self.next_node += 1;
+        (self.node_base + self.next_node - 1) as u32
+    }
+    fn set_child(&mut self, node: u32, lane: usize, reference: u32, b: Aabb) {
+        let n = &mut self.nodes[node as usize - self.node_base];
+        n.children[lane] = reference;
+        for axis in 0..3 {
+            n.bounds[axis][lane] = b.min[axis];
+            n.bounds[3 + axis][lane] = b.max[axis];
+        }
+    }
+    fn block(&mut self, leaf: usize) -> u32 {
+        self.leaves[self.next_block] = leaf as u32;
+        self.next_block += 1;
+        (self.block_base + self.next_block - 1) as u32
+    }
+}
+
+/// The top part's binary subtrees left to tasks, in emission order, and
+/// (once the tasks are placed) each one's reference.
+#[derive(Default)]
+struct Deferred {
+    subtrees: Vec<usize>,
+    roots: Vec<u32>,
+    next: usize,
+}
+
 impl Collapser<'_> {
     fn is_leaf(&self, node: usize) -> bool {
         self.binary[node].is_leaf() || self.ranges[node].1 <= 4
     }
 
-    /// Emits the subtree under binary node `node`; returns its child reference.
-    fn emit(&mut self, node: usize) -> u32 {
+    fn collapse_all(&self, parallel: bool) -> (u32, Vec<WideNode>, Vec<TriangleBlock>) {
+        // Dry runs: the top, which lists the tasks, then every task.
+        let mut deferred = Deferred::default();
+        let mut top = Count::default();
+        let root_is_task = !self.is_leaf(0) && self.ranges[0].1 <= TASK_TRIANGLES;
+        if root_is_task {
+            deferred.subtrees.push(0);
+        } else {
+            self.emit(0, &mut top, Some(&mut deferred));
+        }
+        let count = |&subtree: &usize| {
+            let mut n = Count::default();
+            self.emit(subtree, &mut n, None);
+            n
+        };
+        let counts: Vec<Count> = if parallel {
+            use rayon::prelude::*;
+            deferred.subtrees.par_iter().map(count).collect()
+        } else {
+            deferred.subtrees.iter().map(count).collect()
+        };
+        // Each task's place; its root is its first node.
+        let mut at = top;
+        let mut starts = Vec::with_capacity(counts.len());
+        for n in &counts {
+            starts.push(at);
+            deferred.roots.push(at.nodes as u32);
+            at.nodes += n.nodes;
+            at.blocks += n.blocks;
+        }
+        // Zeroed pages from the allocator: the tasks' writes fault them in,
+        // in parallel, rather than one thread filling them first.
+        let mut nodes: Vec<WideNode> = bytemuck::zeroed_vec(at.nodes);
+        let mut leaves = vec![0u32; at.blocks];
+        assert!(
+            leaves.len() <= LEAF_INDEX_MASK as usize + 1,
+            "too many leaves for a 29-bit index"
+        );
+        let (top_nodes, mut rest_nodes) = nodes.split_at_mut(top.nodes);
+        let (top_blocks, mut rest_blocks) = leaves.split_at_mut(top.blocks);
+        let root = if root_is_task {
+            deferred.roots[0]
+        } else {
+            let mut out = Stretch::new(top_nodes, top_blocks, Count::default());
+            self.emit(0, &mut out, Some(&mut deferred))
+        };
+        let mut tasks = Vec::with_capacity(counts.len());
+        for ((&subtree, n), &start) in deferred.subtrees.iter().zip(&counts).zip(&starts) {
+            let (task_nodes, more_nodes) = std::mem::take(&mut rest_nodes).split_at_mut(n.nodes);
+            let (task_blocks, more_blocks) =
+                std::mem::take(&mut rest_blocks).split_at_mut(n.blocks);
+            (rest_nodes, rest_blocks) = (more_nodes, more_blocks);
+            tasks.push((subtree, Stretch::new(task_nodes, task_blocks, start)));
+        }
+        let run = |(subtree, mut out): (usize, Stretch)| {
+            self.emit(subtree, &mut out, None);
+        };
+        if parallel {
+            use rayon::prelude::*;
+            tasks.into_par_iter().for_each(run);
+        } else {
+            tasks.into_iter().for_each(run);
+        }
+        // The blocks last, in one flat pass: gathering each leaf's
+        // triangles reads all over the caller's array, and a plain loop
+        // (on every thread) keeps many of those reads in flight.
+        let mut blocks: Vec<TriangleBlock> = bytemuck::zeroed_vec(leaves.len());
+        let fill = |(out, leaves): (&mut [TriangleBlock], &[u32])| {
+            for (k, (block, &n)) in out.iter_mut().zip(leaves).enumerate() {
+                if let Some(&ahead) = leaves.get(k + PREFETCH_BLOCKS) {
+                    self.prefetch_leaf(ahead as usize);
+                }
+                *block = self.leaf_block(n as usize);
+            }
+        };
+        if parallel {
+            use rayon::prelude::*;
+            blocks
+                .par_chunks_mut(BLOCK_CHUNK)
+                .zip(leaves.par_chunks(BLOCK_CHUNK))
+                .for_each(fill);
+        } else {
+            blocks
+                .chunks_mut(BLOCK_CHUNK)
+                .zip(leaves.chunks(BLOCK_CHUNK))
+                .for_each(fill);
+        }
+        (root, nodes, blocks)
+    }
+
+    /// Emits the subtree under binary node `node`; returns its child
+    /// reference. With `deferred`, non-leaf subtrees of at most
+    /// `TASK_TRIANGLES` are left to tasks: listed on a dry run, referred
+    /// to by their placed roots on the real one.
+    fn emit<S: Sink>(&self, node: usize, out: &mut S, mut deferred: Option<&mut Deferred>) -> u32 {
         if self.is_leaf(node) {
-            return self.emit_leaf(node);
+            let (_, count) = self.ranges[node];
+            return LEAF_BIT | (count - 1) << LEAF_COUNT_SHIFT | out.block(node);
         }
         let nodes = self.binary;
         let first = nodes[node].first as usize;
-        let mut children = [first, first + 1, 0, 0];
+        let mut children = [0; WIDTH];
+        (children[0], children[1]) = (first, first + 1);
         let mut count = 2;
-        while count < 4 {
+        while count < WIDTH {
             let mut widest = None;
             let mut widest_area = f32::NEG_INFINITY;
             for (k, &c) in children[..count].iter().enumerate() {
@@ -139,26 +336,43 @@ impl Collapser<'_> {
             children[count] = opened + 1;
             count += 1;
         }
-        let children = &children[..count];
-        let index = self.nodes.len();
-        self.nodes.push(Node4 {
-            bounds: EMPTY_BOUNDS,
-            children: [EMPTY_CHILD; 4],
-        });
-        for (lane, &child) in children.iter().enumerate() {
-            let reference = self.emit(child);
-            let b = nodes[child].bounds;
-            let n = &mut self.nodes[index];
-            n.children[lane] = reference;
-            for axis in 0..3 {
-                n.bounds[axis][lane] = b.min[axis];
-                n.bounds[3 + axis][lane] = b.max[axis];
-            }
+        let index = out.node();
+        for (lane, &child) in children[..count].iter().enumerate() {
+            let reference = match deferred.as_deref_mut() {
+                Some(d) if !self.is_leaf(child) && self.ranges[child].1 <= TASK_TRIANGLES => {
+                    if d.roots.is_empty() {
+                        d.subtrees.push(child);
+                        EMPTY_CHILD
+                    } else {
+                        d.next += 1;
+                        d.roots[d.next - 1]
+                    }
+                }
+                _ => self.emit(child, out, deferred.as_deref_mut()),
+            };
+            out.set_child(index, lane, reference, nodes[child].bounds);
         }
-        index as u32
+        index
     }
 
-    fn emit_leaf(&mut self, node: usize) -> u32 {
+    /// Asks the cache for the triangles `leaf_block(node)` will read.
+    #[inline(always)]
+    fn prefetch_leaf(&self, node: usize) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let (first, count) = self.ranges[node];
+            for &id in &self.order[first as usize..(first + count) as usize] {
+                let t: *const Triangle = &self.triangles[id as usize];
+                // SAFETY: a prefetch is a hint; it reads nothing.
+                unsafe {
+                    std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(t.cast())
+                };
+            }
+        }
+    }
+
+    /// The block of the (up to four) triangles under binary node `node`.
+    fn leaf_block(&self, node: usize) -> TriangleBlock {
         let (first, count) = self.ranges[node];
         let mut block = TriangleBlock {
             v: [[[0.0; 4]; 3]; 3],
@@ -179,12 +393,6 @@ impl Collapser<'_> {
             }
             block.id[lane] = id;
         }
-        let index = self.blocks.len() as u32;
-        assert!(
-            index <= LEAF_INDEX_MASK,
-            "too many leaves for a 29-bit index"
-        );
-        self.blocks.push(block);
-        LEAF_BIT | (count - 1) << LEAF_COUNT_SHIFT | index
+        block
     }
 }

@@ -1,5 +1,5 @@
 //! Packets: up to eight coherent rays (camera rays through neighbouring
-//! pixels) traced together through the 4-wide BVH (Wald, Slusallek, Benthin
+//! pixels) traced together through the 8-wide BVH (Wald, Slusallek, Benthin
 //! and Wagner, "Interactive Rendering with Coherent Ray Tracing", 2001). Each
 //! node is fetched once for the packet, and each child box is tested against
 //! all eight rays in one 8-wide SIMD step; leaves are tested ray by ray with
@@ -7,7 +7,7 @@
 //! get alone. `tracer bench` measures this against single-ray traversal.
 
 use super::traverse::{leaf, safe_inverse, RayLanes, Stack, EXIT_STRETCH};
-use super::{WideBvh, EMPTY_CHILD, LEAF_BIT};
+use super::{WideBvh, EMPTY_CHILD, LEAF_BIT, WIDTH};
 use crate::bvh::Hit;
 use crate::geometry::Ray;
 use wide::f32x8;
@@ -51,7 +51,7 @@ impl PacketLanes {
     /// Which rays enter box `lane` of `bounds` before their own `tmax`, and
     /// the nearest entry distance among them.
     #[inline(always)]
-    fn enter(&self, bounds: &[[f32; 4]; 6], lane: usize, tmax: f32x8) -> (u32, f32) {
+    fn enter(&self, bounds: &[[f32; WIDTH]; 6], lane: usize, tmax: f32x8) -> (u32, f32) {
         let mut near = self.tmin;
         let mut far = tmax;
         for axis in 0..3 {
@@ -104,9 +104,9 @@ impl WideBvh {
             if reference & LEAF_BIT == 0 {
                 let node = &self.nodes[reference as usize];
                 let tmax_lanes = f32x8::new(tmax);
-                let mut entered = [(0u32, 0u32, 0f32); 4];
+                let mut entered = [(0u32, 0u32, 0f32); WIDTH];
                 let mut count = 0;
-                for lane in 0..4 {
+                for lane in 0..WIDTH {
                     if node.children[lane] == EMPTY_CHILD {
                         continue;
                     }

@@ -1,18 +1,19 @@
-//! Closest-hit and any-hit traversal of the 4-wide BVH: one SIMD slab test
-//! for a node's four children, nearest child first, and one SIMD watertight
+//! Closest-hit and any-hit traversal of the 8-wide BVH: one SIMD slab test
+//! for a node's eight children, nearest child first, and one SIMD watertight
 //! test (Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection",
 //! 2013) for a leaf's four triangles. The triangle test computes exactly what
 //! the scalar `RayShear` computes, lane by lane, so both BVHs report the
 //! same distances bit for bit.
 
 use super::{
-    Node4, TriangleBlock, WideBvh, EMPTY_CHILD, LEAF_BIT, LEAF_COUNT_SHIFT, LEAF_INDEX_MASK,
+    TriangleBlock, WideBvh, WideNode, EMPTY_CHILD, LEAF_BIT, LEAF_COUNT_SHIFT, LEAF_INDEX_MASK,
+    WIDTH,
 };
 use crate::bvh::Hit;
 use crate::geometry::triangle::RayShear;
 use crate::geometry::{Aabb, Ray};
 use std::mem::MaybeUninit;
-use wide::f32x4;
+use wide::{f32x4, f32x8};
 
 /// A leaf reference's block index and triangle count.
 #[inline(always)]
@@ -24,10 +25,10 @@ pub(super) fn leaf(reference: u32) -> (usize, u32) {
 }
 
 /// The deepest tree the traversal stack holds: each node visit pushes at
-/// most three children, and the builder's trees are at most 96 deep (64 SAH
+/// most `WIDTH - 1` children, and the builder's trees are at most 96 deep (64 SAH
 /// levels plus a median tail of at most 32).
 pub(super) const MAX_DEPTH: usize = 96;
-const STACK_SIZE: usize = 3 * MAX_DEPTH + 4;
+const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH + 4;
 
 /// The traversal stack, left uninitialised: zeroing two kilobytes on every
 /// ray cost more than the traversal itself in small scenes.
@@ -82,9 +83,10 @@ pub(super) fn safe_inverse(c: f32) -> f32 {
 
 /// The ray, splatted across lanes, with what every test reuses.
 pub(super) struct RayLanes {
-    origin: [f32x4; 3],
-    inv_dir: [f32x4; 3],
-    /// Per axis, which row of `Node4::bounds` holds the near plane (the
+    origin: [f32x8; 3],
+    inv_dir: [f32x8; 3],
+    origin4: [f32x4; 3],
+    /// Per axis, which row of `WideNode::bounds` holds the near plane (the
     /// minimum for a positive direction, the maximum for a negative one).
     near_row: [usize; 3],
     tmin: f32x4,
@@ -104,8 +106,9 @@ impl RayLanes {
         let inv = d.map(safe_inverse);
         let (k, s) = RayShear::new(ray.origin, ray.dir).parts();
         RayLanes {
-            origin: o.map(f32x4::splat),
-            inv_dir: inv.map(f32x4::splat),
+            origin: o.map(f32x8::splat),
+            inv_dir: inv.map(f32x8::splat),
+            origin4: o.map(f32x4::splat),
             near_row: [0, 1, 2].map(|a| if inv[a] >= 0.0 { a } else { a + 3 }),
             tmin: f32x4::splat(ray.tmin),
             k,
@@ -130,19 +133,19 @@ impl RayLanes {
         near <= far * EXIT_STRETCH
     }
 
-    /// Entry distances into the four child boxes, and a bit mask of those
+    /// Entry distances into the node's child boxes, and a bit mask of those
     /// the ray enters before `tmax`.
     #[inline(always)]
-    fn enter(&self, node: &Node4, tmax: f32) -> (f32x4, u32) {
-        let mut near = self.tmin;
-        let mut far = f32x4::splat(tmax);
+    fn enter(&self, node: &WideNode, tmax: f32) -> (f32x8, u32) {
+        let mut near = f32x8::splat(self.scalar_tmin);
+        let mut far = f32x8::splat(tmax);
         for axis in 0..3 {
-            let near_plane = f32x4::new(node.bounds[self.near_row[axis]]);
-            let far_plane = f32x4::new(node.bounds[(self.near_row[axis] + 3) % 6]);
+            let near_plane = f32x8::new(node.bounds[self.near_row[axis]]);
+            let far_plane = f32x8::new(node.bounds[(self.near_row[axis] + 3) % 6]);
             near = near.fast_max((near_plane - self.origin[axis]) * self.inv_dir[axis]);
             far = far.fast_min((far_plane - self.origin[axis]) * self.inv_dir[axis]);
         }
-        let mask = near.simd_le(far * f32x4::splat(EXIT_STRETCH)).to_bitmask();
+        let mask = near.simd_le(far * f32x8::splat(EXIT_STRETCH)).to_bitmask();
         (near, mask)
     }
 
@@ -160,9 +163,9 @@ impl RayLanes {
         let [sx, sy, sz] = self.shear;
         // Vertex positions relative to the origin, sheared so the ray runs along +z.
         let project = |v: &[[f32; 4]; 3]| {
-            let x = f32x4::new(v[kx]) - self.origin[kx];
-            let y = f32x4::new(v[ky]) - self.origin[ky];
-            let z = f32x4::new(v[kz]) - self.origin[kz];
+            let x = f32x4::new(v[kx]) - self.origin4[kx];
+            let y = f32x4::new(v[ky]) - self.origin4[ky];
+            let z = f32x4::new(v[kz]) - self.origin4[kz];
             (x - sx * z, y - sy * z, z)
         };
         let (ax, ay, az) = project(&block.v[0]);
@@ -235,8 +238,8 @@ impl WideBvh {
                 let node = &self.nodes[current as usize];
                 let (near, mut mask) = lanes.enter(node, tmax);
                 let near = near.to_array();
-                // The entered children, nearest first (insertion sort of at most four).
-                let mut order = [(0u32, 0f32); 4];
+                // The entered children, nearest first (insertion sort).
+                let mut order = [(0u32, 0f32); WIDTH];
                 let mut count = 0;
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;

@@ -29,7 +29,7 @@ use std::sync::Arc;
 /// The first eight bytes of every entry.
 pub const MAGIC: [u8; 8] = *b"TRCACHE\0";
 /// Bump whenever the layout of any section or of the metadata changes.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Size of the fixed header, before the section table.
 pub const HEADER_BYTES: usize = 96;
 const TABLE_ROW_BYTES: usize = 16;

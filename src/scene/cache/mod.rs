@@ -1,5 +1,5 @@
 //! The scene cache: a scene's prepared geometry (world-space triangles,
-//! shading data, emitters, MTL materials) and its 4-wide BVH, kept on disk
+//! shading data, emitters, MTL materials) and its 8-wide BVH, kept on disk
 //! so that rendering the same scene again skips parsing meshes and building
 //! the BVH.
 //!
