@@ -319,21 +319,31 @@ impl Collapser<'_> {
         let nodes = self.binary;
         let first = nodes[node].first as usize;
         let mut children = [0; WIDTH];
+        // Each child's area if it can be opened, −∞ if it is a leaf:
+        // computed once per child rather than on every round.
+        let openable = |c: usize| {
+            if self.is_leaf(c) {
+                f32::NEG_INFINITY
+            } else {
+                nodes[c].bounds.surface_area()
+            }
+        };
+        let mut areas = [f32::NEG_INFINITY; WIDTH];
         (children[0], children[1]) = (first, first + 1);
+        (areas[0], areas[1]) = (openable(first), openable(first + 1));
         let mut count = 2;
         while count < WIDTH {
             let mut widest = None;
             let mut widest_area = f32::NEG_INFINITY;
-            for (k, &c) in children[..count].iter().enumerate() {
-                let area = nodes[c].bounds.surface_area();
-                if !self.is_leaf(c) && area > widest_area {
+            for (k, &area) in areas[..count].iter().enumerate() {
+                if area > widest_area {
                     (widest, widest_area) = (Some(k), area);
                 }
             }
             let Some(k) = widest else { break };
             let opened = nodes[children[k]].first as usize;
-            children[k] = opened;
-            children[count] = opened + 1;
+            (children[k], areas[k]) = (opened, openable(opened));
+            (children[count], areas[count]) = (opened + 1, openable(opened + 1));
             count += 1;
         }
         let index = out.node();
