@@ -331,8 +331,8 @@ fn parallel_build_equals_sequential_build() {
     );
     assert_eq!(parallel.nodes().len(), sequential.nodes().len());
     assert!(parallel.nodes() == sequential.nodes());
-    // The wide BVH too: subtrees collapsed in parallel land where the
-    // sequential depth-first collapse puts them.
+    // The wide BVH too: the collapse's tasks land in the same places
+    // whether they run in parallel or one after another.
     let wide = WideBvh::build(&tris);
     let wide_sequential = WideBvh::build_with(
         &tris,

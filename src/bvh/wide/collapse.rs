@@ -204,11 +204,12 @@ impl Sink for Stretch<'_> {
 }
 
 /// The top part's binary subtrees left to tasks, in emission order, and
-/// (once the tasks are placed) each one's reference.
+/// each one's reference once the tasks are placed: `None` on the dry run,
+/// which lists the subtrees.
 #[derive(Default)]
 struct Deferred {
     subtrees: Vec<usize>,
-    roots: Vec<u32>,
+    roots: Option<Vec<u32>>,
     next: usize,
 }
 
@@ -241,9 +242,10 @@ impl Collapser<'_> {
         // Each task's place; its root is its first node.
         let mut at = top;
         let mut starts = Vec::with_capacity(counts.len());
+        let mut roots = Vec::with_capacity(counts.len());
         for n in &counts {
             starts.push(at);
-            deferred.roots.push(at.nodes as u32);
+            roots.push(at.nodes as u32);
             at.nodes += n.nodes;
             at.blocks += n.blocks;
         }
@@ -258,8 +260,9 @@ impl Collapser<'_> {
         let (top_nodes, mut rest_nodes) = nodes.split_at_mut(top.nodes);
         let (top_blocks, mut rest_blocks) = leaves.split_at_mut(top.blocks);
         let root = if root_is_task {
-            deferred.roots[0]
+            roots[0]
         } else {
+            deferred.roots = Some(roots);
             let mut out = Stretch::new(top_nodes, top_blocks, Count::default());
             self.emit(0, &mut out, Some(&mut deferred))
         };
@@ -350,12 +353,15 @@ impl Collapser<'_> {
         for (lane, &child) in children[..count].iter().enumerate() {
             let reference = match deferred.as_deref_mut() {
                 Some(d) if !self.is_leaf(child) && self.ranges[child].1 <= TASK_TRIANGLES => {
-                    if d.roots.is_empty() {
-                        d.subtrees.push(child);
-                        EMPTY_CHILD
-                    } else {
-                        d.next += 1;
-                        d.roots[d.next - 1]
+                    match &d.roots {
+                        None => {
+                            d.subtrees.push(child);
+                            EMPTY_CHILD
+                        }
+                        Some(roots) => {
+                            d.next += 1;
+                            roots[d.next - 1]
+                        }
                     }
                 }
                 _ => self.emit(child, out, deferred.as_deref_mut()),
