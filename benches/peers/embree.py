@@ -7,9 +7,11 @@ rays), `tracer bench --save-rays` writes its ray sets (primary, diffuse,
 incoherent, shadow) and the triangles it traced, and measures itself; then
 Embree, through `embreex` (Embree 4.4 with TBB), builds a BVH over the same
 triangles and traces the same rays, once per thread count, in a process
-pinned to that many CPUs (so TBB's build uses exactly those). It prints one
-table per input: Mrays/s for tracer and Embree, their ratio, and whether the
-hit counts and the sums of closest-hit distances agree.
+pinned to that many CPUs (so TBB's build uses exactly those); and the
+`obvhs` crate (its CWBVH, `fast_build` preset) does the same through
+`examples/obvhs_rays.rs`, also pinned. It prints one table per input:
+Mrays/s for tracer, Embree and obvhs, tracer's ratio to each, and whether
+the hit counts and the sums of closest-hit distances agree with Embree's.
 
 Embree's build time is its commit (`rtcCommitScene`, which embreex calls
 on the first query), not embreex's copy of the triangles into Embree's
@@ -123,6 +125,25 @@ def run_worker(folder, threads, runs):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def obvhs_version():
+    """The obvhs version Cargo.lock pins (what examples/obvhs_rays.rs is built with)."""
+    with open(os.path.join(ROOT, "Cargo.lock")) as f:
+        packages = f.read().split("[[package]]")
+    for p in packages:
+        if 'name = "obvhs"' in p:
+            return p.split('version = "')[1].split('"')[0]
+    return "unknown"
+
+
+def run_obvhs(binary, folder, threads, runs):
+    """obvhs's figures (examples/obvhs_rays.rs), pinned like Embree's."""
+    cpus = sorted(os.sched_getaffinity(0))[:threads]
+    out = subprocess.run([binary, folder, str(threads), str(runs)], check=True,
+                         capture_output=True, text=True,
+                         preexec_fn=lambda: os.sched_setaffinity(0, cpus))
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
 def tracer_bench(tracer, source, folder, threads, runs):
     cmd = [tracer, "bench", source, "--json", "--runs", str(runs), "--save-rays", folder,
            "--threads", ",".join(map(str, threads))]
@@ -130,30 +151,43 @@ def tracer_bench(tracer, source, folder, threads, runs):
     return json.loads(out.stdout)
 
 
-def table(ours, embree):
-    lines = ["| rays | query | threads | tracer Mrays/s | Embree Mrays/s | tracer / Embree | hits (tracer, Embree) | distance sums |",
-             "|---|---|---:|---:|---:|---:|---|---|"]
+def table(ours, embree, obvhs):
+    lines = ["| rays | query | threads | tracer Mrays/s | Embree Mrays/s | obvhs Mrays/s "
+             "| tracer / Embree | tracer / obvhs | hits (tracer, Embree, obvhs) | distance sums |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---|---|"]
     theirs = {(t["rays"], t["query"], t["threads"]): t for e in embree for t in e["traces"]}
+    others = {(t["rays"], t["query"], t["threads"]): t for o in obvhs for t in o["traces"]}
     for t in ours["traces"]:
-        e = theirs.get((t["rays"], t["query"], t["threads"]))
+        key = (t["rays"], t["query"], t["threads"])
+        e = theirs.get(key)
         if e is None:
             continue
-        same = "equal" if t["hits"] == e["hits"] else f"{t['hits']} vs {e['hits']}"
+        o = others.get(key)
+        counts = [e["hits"]] + ([o["hits"]] if o else [])
+        same = "equal" if all(c == t["hits"] for c in counts) else \
+            ", ".join(str(c) for c in [t["hits"]] + counts)
         if t["query"] == "closest" and e["distance_sum"] > 0:
             rel = abs(t["distance_sum"] - e["distance_sum"]) / e["distance_sum"]
             sums = f"rel. diff {rel:.1e}"
         else:
             sums = "-"
-        lines.append(f"| {t['rays']} | {t['query']} | {t['threads']} | {t['mrays_per_second']:.2f} | "
-                     f"{e['mrays_per_second']:.2f} | {t['mrays_per_second'] / e['mrays_per_second']:.2f} | "
-                     f"{same} | {sums} |")
-    lines += ["", "| build | threads | tracer s | Embree s | Embree / tracer |", "|---|---:|---:|---:|---:|"]
+        mine = t["mrays_per_second"]
+        obvhs_cells = (f"{o['mrays_per_second']:.2f}", f"{mine / o['mrays_per_second']:.2f}") \
+            if o else ("-", "-")
+        lines.append(f"| {t['rays']} | {t['query']} | {t['threads']} | {mine:.2f} | "
+                     f"{e['mrays_per_second']:.2f} | {obvhs_cells[0]} | "
+                     f"{mine / e['mrays_per_second']:.2f} | {obvhs_cells[1]} | {same} | {sums} |")
+    lines += ["", "| build | threads | tracer s | Embree s | obvhs s | Embree / tracer | obvhs / tracer |",
+              "|---|---:|---:|---:|---:|---:|---:|"]
     builds = {e["threads"]: e["build_seconds"] for e in embree}
+    obvhs_builds = {o["threads"]: o["build_seconds"] for o in obvhs}
     for b in ours["builds"]:
         if b["threads"] in builds:
             e = builds[b["threads"]]
+            o = obvhs_builds.get(b["threads"])
+            cells = (f"{o:.3f}", f"{o / b['seconds']:.2f}") if o else ("-", "-")
             lines.append(f"| {ours['triangles']} triangles | {b['threads']} | {b['seconds']:.3f} | "
-                         f"{e:.3f} | {e / b['seconds']:.2f} |")
+                         f"{e:.3f} | {cells[0]} | {e / b['seconds']:.2f} | {cells[1]} |")
     return "\n".join(lines)
 
 
@@ -164,11 +198,15 @@ def main(argv=None):
     ap.add_argument("--runs", type=int, default=5, help="timed runs per figure (median)")
     ap.add_argument("--out", default=os.path.join(ROOT, "target", "embree"))
     ap.add_argument("--tracer", default=os.path.join(ROOT, "target", "release", "tracer"))
+    ap.add_argument("--obvhs", default=os.path.join(ROOT, "target", "release", "examples", "obvhs_rays"),
+                    help="the obvhs_rays example binary")
+    ap.add_argument("--no-obvhs", action="store_true", help="leave obvhs out")
     ap.add_argument("--no-build", action="store_true", help="do not run cargo build --release")
     args = ap.parse_args(argv)
     threads = [int(t) for t in args.threads.split(",")]
     if not args.no_build:
-        subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
+        subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", "tracer",
+                        "--example", "obvhs_rays"], cwd=ROOT, check=True)
     os.makedirs(args.out, exist_ok=True)
     report = {
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
@@ -178,7 +216,7 @@ def main(argv=None):
         "inputs": [],
     }
     md = [f"# tracer against Embree\n\n- date: {report['date']}\n- machine: {report['machine']}\n"
-          f"- {report['tracer']}; embreex {report['embreex']} (Embree 4.4)\n"
+          f"- {report['tracer']}; embreex {report['embreex']} (Embree 4.4); obvhs {obvhs_version()} (CWBVH, fast_build)\n"
           f"- medians of {args.runs} runs; Mrays/s = rays / seconds\n"]
     for source in args.inputs:
         name = os.path.splitext(os.path.basename(source))[0]
@@ -186,8 +224,9 @@ def main(argv=None):
         print(f"== {source}", flush=True)
         ours = tracer_bench(args.tracer, source, folder, threads, args.runs)
         embree = [run_worker(folder, t, args.runs) for t in threads]
-        report["inputs"].append({"input": source, "tracer": ours, "embree": embree})
-        text = table(ours, embree)
+        obvhs = [] if args.no_obvhs else [run_obvhs(args.obvhs, folder, t, args.runs) for t in threads]
+        report["inputs"].append({"input": source, "tracer": ours, "embree": embree, "obvhs": obvhs})
+        text = table(ours, embree, obvhs)
         print(text, flush=True)
         md.append(f"## {source} ({ours['triangles']} triangles)\n\n{text}\n")
     with open(os.path.join(args.out, "results.json"), "w") as f:
