@@ -656,6 +656,74 @@ def markdown(meta, results):
     return "\n".join(lines)
 
 
+README_BEGIN = "<!-- made by benches/peers/compare.py --readme from its results.json; do not edit -->"
+README_END = "<!-- end of the table made by compare.py -->"
+
+
+def readme_table(meta, results):
+    """The README's table of renders against Mitsuba, between its markers."""
+    m = meta["machine"]
+    lines = [README_BEGIN, "",
+             f"Rendering against Mitsuba {meta['mitsuba']} (`{meta['variant']}`, Dr.Jit "
+             f"{meta['drjit']}) in the same run: {meta['threads']} threads, "
+             f"{meta['date'][:10]}, {m['cpu']} ({m['cores']} cores), tracer at git {meta['git']}, "
+             f"`{meta['command']}`. Efficiency is 1 / (relative MSE x seconds) at equal samples "
+             f"per pixel, against Mitsuba's most efficient sampler for the scene.", "",
+             "| scene | tracer M samples/s | Mitsuba M samples/s | tracer / Mitsuba | "
+             "efficiency, tracer / Mitsuba (its sampler) |",
+             "|---|---|---|---:|---:|"]
+    for res in results:
+        scene = f"{os.path.splitext(os.path.basename(res['scene']))[0]} {res['size'][0]} x {res['size'][1]}, {res['spp']} spp"
+        for ours, theirs in (("pt", "path"), ("lt", "ptracer")):
+            mine = [r for r in res["fixed"] if r["renderer"] == "tracer" and r["integrator"] == ours]
+            peers = [r for r in res["fixed"] if r["renderer"] == "mitsuba" and r["integrator"] == theirs]
+            if not mine or not peers:
+                continue
+            t = mine[0]
+            fastest = max(peers, key=lambda r: r["msamples_per_s"])
+            best = max(peers, key=lambda r: r["efficiency"])
+            lines.append(f"| {scene} | `{ours}` {t['msamples_per_s']:.2f} | `{theirs}` "
+                         f"{fastest['msamples_per_s']:.2f} (`{fastest['sampler']}`) | "
+                         f"{t['msamples_per_s'] / fastest['msamples_per_s']:.2f}x | "
+                         f"{t['efficiency'] / best['efficiency']:.2f}x (`{best['sampler']}`) |")
+    def verdict(r):
+        a = r["agreement"]
+        text = (f"{os.path.splitext(os.path.basename(r['scene']))[0]}: "
+                f"{'agrees' if a['pass'] else 'does not agree'} (worst |t| {abs(a['worst_t']):.1f} "
+                f"against a bound of {a['threshold_t']:.1f}, {a['mitsuba_spp']} spp)")
+        control = a.get("control")
+        if control:
+            text += (f"; the same test on tracer's own `pt`, which converges to the reference, "
+                     f"{'passes' if control['pass'] else 'fails too'} (worst |t| "
+                     f"{abs(control['worst_t']):.1f})")
+        return text
+
+    verdicts = [verdict(r) for r in results if r["agreement"]]
+    if verdicts:
+        lines += ["", "Mitsuba's long `path` render against tracer's reference, block by block, "
+                  "within noise at a 1% family-wise level: " + "; ".join(verdicts) + ". A failing "
+                  "control means the test's normal approximation does not hold on that scene "
+                  "(rare, very bright caustic samples), not that the images differ; see "
+                  "[docs/benchmarks.md](docs/benchmarks.md#peers-mitsuba-3)."]
+    lines += ["", README_END]
+    return "\n".join(lines)
+
+
+def update_readme(meta, results):
+    path = os.path.join(REPO, "README.md")
+    with open(path) as f:
+        text = f.read()
+    if README_BEGIN not in text or README_END not in text:
+        raise SystemExit(f"error: {path} has no compare.py markers")
+    head, rest = text.split(README_BEGIN, 1)
+    tail = rest.split(README_END, 1)[1]
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write(head + readme_table(meta, results) + tail)
+    os.replace(tmp, path)
+    log(f"updated the table in {os.path.relpath(path, REPO)}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -693,11 +761,16 @@ def main(argv=None):
     ap.add_argument("--out", default=os.path.join(REPO, "target", "peers"))
     ap.add_argument("--report", metavar="RESULTS_JSON",
                     help="render nothing: print the Markdown tables of an earlier run's results.json")
+    ap.add_argument("--readme", action="store_true",
+                    help="rewrite the README's table of renders against Mitsuba from this run "
+                         "(or, with --report, from that run's results)")
     args = ap.parse_args(argv)
     if args.report:
         with open(args.report) as f:
             saved = json.load(f)
         print(markdown(saved["meta"], saved["results"]))
+        if args.readme:
+            update_readme(saved["meta"], saved["results"])
         return 0
     if args.quick:
         args.size, args.spp, args.runs = 64, 4, 1
@@ -763,6 +836,8 @@ def main(argv=None):
     with open(os.path.join(args.out, "results.md"), "w") as f:
         f.write(md + "\n")
     print(md)
+    if args.readme and not args.quick:
+        update_readme(meta, results)
     log(f"\nwrote {os.path.relpath(os.path.join(args.out, 'results.json'), REPO)}, "
         f"results.md and {len(images)} images in {os.path.relpath(os.path.join(args.out, 'images'), REPO)}")
     if args.quick:
