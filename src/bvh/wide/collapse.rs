@@ -48,8 +48,10 @@ impl WideBvh {
     /// nodes and blocks follow, task after task. A dry run counts what each
     /// part emits, so every task then writes straight into its own stretch
     /// of the final arrays; the tasks note which binary leaf each block
-    /// comes from, and one flat parallel pass fills the blocks. The layout
-    /// depends on the tree alone, never on the thread count.
+    /// comes from, and one flat parallel pass fills the blocks. Without
+    /// `parallel` the tasks run in order, each appending where the last
+    /// ended, which gives the same layout without their dry runs. The
+    /// layout depends on the tree alone, never on the thread count.
     pub(in crate::bvh) fn collapse(
         binary: &[Node],
         order: &[u32],
@@ -203,6 +205,35 @@ impl Sink for Stretch<'_> {
     }
 }
 
+/// The end of the final arrays, for the sequential collapse: appends, so
+/// it needs no dry run to know where each task's part starts.
+struct Grow<'a> {
+    nodes: &'a mut Vec<WideNode>,
+    leaves: &'a mut Vec<u32>,
+}
+
+impl Sink for Grow<'_> {
+    fn node(&mut self) -> u32 {
+        self.nodes.push(WideNode {
+            bounds: EMPTY_BOUNDS,
+            children: [EMPTY_CHILD; WIDTH],
+        });
+        (self.nodes.len() - 1) as u32
+    }
+    fn set_child(&mut self, node: u32, lane: usize, reference: u32, b: Aabb) {
+        let n = &mut self.nodes[node as usize];
+        n.children[lane] = reference;
+        for axis in 0..3 {
+            n.bounds[axis][lane] = b.min[axis];
+            n.bounds[3 + axis][lane] = b.max[axis];
+        }
+    }
+    fn block(&mut self, leaf: usize) -> u32 {
+        self.leaves.push(leaf as u32);
+        (self.leaves.len() - 1) as u32
+    }
+}
+
 /// The top part's binary subtrees left to tasks, in emission order, and
 /// each one's reference once the tasks are placed: `None` on the dry run,
 /// which lists the subtrees.
@@ -219,70 +250,15 @@ impl Collapser<'_> {
     }
 
     fn collapse_all(&self, parallel: bool) -> (u32, Vec<WideNode>, Vec<TriangleBlock>) {
-        // Dry runs: the top, which lists the tasks, then every task.
-        let mut deferred = Deferred::default();
-        let mut top = Count::default();
-        let root_is_task = !self.is_leaf(0) && self.ranges[0].1 <= TASK_TRIANGLES;
-        if root_is_task {
-            deferred.subtrees.push(0);
+        let (root, nodes, leaves) = if parallel {
+            self.place_parallel()
         } else {
-            self.emit(0, &mut top, Some(&mut deferred));
-        }
-        let count = |&subtree: &usize| {
-            let mut n = Count::default();
-            self.emit(subtree, &mut n, None);
-            n
+            self.place_sequential()
         };
-        let counts: Vec<Count> = if parallel {
-            use rayon::prelude::*;
-            deferred.subtrees.par_iter().map(count).collect()
-        } else {
-            deferred.subtrees.iter().map(count).collect()
-        };
-        // Each task's place; its root is its first node.
-        let mut at = top;
-        let mut starts = Vec::with_capacity(counts.len());
-        let mut roots = Vec::with_capacity(counts.len());
-        for n in &counts {
-            starts.push(at);
-            roots.push(at.nodes as u32);
-            at.nodes += n.nodes;
-            at.blocks += n.blocks;
-        }
-        // Zeroed pages from the allocator: the tasks' writes fault them in,
-        // in parallel, rather than one thread filling them first.
-        let mut nodes: Vec<WideNode> = bytemuck::zeroed_vec(at.nodes);
-        let mut leaves = vec![0u32; at.blocks];
         assert!(
             leaves.len() <= LEAF_INDEX_MASK as usize + 1,
             "too many leaves for a 29-bit index"
         );
-        let (top_nodes, mut rest_nodes) = nodes.split_at_mut(top.nodes);
-        let (top_blocks, mut rest_blocks) = leaves.split_at_mut(top.blocks);
-        let root = if root_is_task {
-            roots[0]
-        } else {
-            deferred.roots = Some(roots);
-            let mut out = Stretch::new(top_nodes, top_blocks, Count::default());
-            self.emit(0, &mut out, Some(&mut deferred))
-        };
-        let mut tasks = Vec::with_capacity(counts.len());
-        for ((&subtree, n), &start) in deferred.subtrees.iter().zip(&counts).zip(&starts) {
-            let (task_nodes, more_nodes) = std::mem::take(&mut rest_nodes).split_at_mut(n.nodes);
-            let (task_blocks, more_blocks) =
-                std::mem::take(&mut rest_blocks).split_at_mut(n.blocks);
-            (rest_nodes, rest_blocks) = (more_nodes, more_blocks);
-            tasks.push((subtree, Stretch::new(task_nodes, task_blocks, start)));
-        }
-        let run = |(subtree, mut out): (usize, Stretch)| {
-            self.emit(subtree, &mut out, None);
-        };
-        if parallel {
-            use rayon::prelude::*;
-            tasks.into_par_iter().for_each(run);
-        } else {
-            tasks.into_iter().for_each(run);
-        }
         // The blocks last, in one flat pass: gathering each leaf's
         // triangles reads all over the caller's array, and a plain loop
         // (on every thread) keeps many of those reads in flight.
@@ -308,6 +284,104 @@ impl Collapser<'_> {
                 .for_each(fill);
         }
         (root, nodes, blocks)
+    }
+
+    /// The sequential collapse: the same layout as the parallel one (the
+    /// top, then task after task), but each task is appended where the
+    /// last one ended, so only the top needs a dry run.
+    fn place_sequential(&self) -> (u32, Vec<WideNode>, Vec<u32>) {
+        let mut deferred = Deferred::default();
+        let mut top = Count::default();
+        let root_is_task = !self.is_leaf(0) && self.ranges[0].1 <= TASK_TRIANGLES;
+        if root_is_task {
+            deferred.subtrees.push(0);
+        } else {
+            self.emit(0, &mut top, Some(&mut deferred));
+        }
+        let mut nodes: Vec<WideNode> = bytemuck::zeroed_vec(top.nodes);
+        let mut leaves = vec![0u32; top.blocks];
+        let mut roots = Vec::with_capacity(deferred.subtrees.len());
+        for &subtree in &deferred.subtrees {
+            let mut out = Grow {
+                nodes: &mut nodes,
+                leaves: &mut leaves,
+            };
+            roots.push(self.emit(subtree, &mut out, None));
+        }
+        let root = if root_is_task {
+            roots[0]
+        } else {
+            deferred.roots = Some(roots);
+            let mut out = Stretch::new(
+                &mut nodes[..top.nodes],
+                &mut leaves[..top.blocks],
+                Count::default(),
+            );
+            self.emit(0, &mut out, Some(&mut deferred))
+        };
+        (root, nodes, leaves)
+    }
+
+    /// The parallel collapse: dry runs size every task's part, then the
+    /// tasks write their parts at once.
+    fn place_parallel(&self) -> (u32, Vec<WideNode>, Vec<u32>) {
+        // Dry runs: the top, which lists the tasks, then every task.
+        let mut deferred = Deferred::default();
+        let mut top = Count::default();
+        let root_is_task = !self.is_leaf(0) && self.ranges[0].1 <= TASK_TRIANGLES;
+        if root_is_task {
+            deferred.subtrees.push(0);
+        } else {
+            self.emit(0, &mut top, Some(&mut deferred));
+        }
+        let count = |&subtree: &usize| {
+            let mut n = Count::default();
+            self.emit(subtree, &mut n, None);
+            n
+        };
+        let counts: Vec<Count> = {
+            use rayon::prelude::*;
+            deferred.subtrees.par_iter().map(count).collect()
+        };
+        // Each task's place; its root is its first node.
+        let mut at = top;
+        let mut starts = Vec::with_capacity(counts.len());
+        let mut roots = Vec::with_capacity(counts.len());
+        for n in &counts {
+            starts.push(at);
+            roots.push(at.nodes as u32);
+            at.nodes += n.nodes;
+            at.blocks += n.blocks;
+        }
+        // Zeroed pages from the allocator: the tasks' writes fault them in,
+        // in parallel, rather than one thread filling them first.
+        let mut nodes: Vec<WideNode> = bytemuck::zeroed_vec(at.nodes);
+        let mut leaves = vec![0u32; at.blocks];
+        let (top_nodes, mut rest_nodes) = nodes.split_at_mut(top.nodes);
+        let (top_blocks, mut rest_blocks) = leaves.split_at_mut(top.blocks);
+        let root = if root_is_task {
+            roots[0]
+        } else {
+            deferred.roots = Some(roots);
+            let mut out = Stretch::new(top_nodes, top_blocks, Count::default());
+            self.emit(0, &mut out, Some(&mut deferred))
+        };
+        let mut tasks = Vec::with_capacity(counts.len());
+        for ((&subtree, n), &start) in deferred.subtrees.iter().zip(&counts).zip(&starts) {
+            let (task_nodes, more_nodes) = std::mem::take(&mut rest_nodes).split_at_mut(n.nodes);
+            let (task_blocks, more_blocks) =
+                std::mem::take(&mut rest_blocks).split_at_mut(n.blocks);
+            (rest_nodes, rest_blocks) = (more_nodes, more_blocks);
+            tasks.push((subtree, Stretch::new(task_nodes, task_blocks, start)));
+        }
+        let run = |(subtree, mut out): (usize, Stretch)| {
+            self.emit(subtree, &mut out, None);
+        };
+        {
+            use rayon::prelude::*;
+            tasks.into_par_iter().for_each(run);
+        }
+        (root, nodes, leaves)
     }
 
     /// Emits the subtree under binary node `node`; returns its child
