@@ -19,28 +19,14 @@ use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 use serde_json::json;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use tracer::bench::{median_seconds, rays};
 
 const SETS: [&str; 4] = ["primary", "diffuse", "incoherent", "shadow"];
 
-fn floats(path: &Path) -> Vec<f32> {
-    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    bytes
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect()
-}
-
-fn median_seconds(runs: usize, mut f: impl FnMut()) -> f64 {
-    let mut times: Vec<f64> = (0..runs.max(1))
-        .map(|_| {
-            let start = Instant::now();
-            f();
-            start.elapsed().as_secs_f64()
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
+/// Converts tracer's ray to obvhs's.
+fn obvhs_ray(r: &tracer::geometry::Ray) -> Ray {
+    Ray::new(Vec3A::from(r.origin), Vec3A::from(r.dir), r.tmin, r.tmax)
 }
 
 fn main() {
@@ -57,12 +43,13 @@ fn main() {
         .build()
         .expect("thread pool");
 
-    let triangles: Vec<Triangle> = floats(&folder.join("triangles.f32"))
-        .chunks_exact(9)
-        .map(|v| Triangle {
-            v0: Vec3A::new(v[0], v[1], v[2]),
-            v1: Vec3A::new(v[3], v[4], v[5]),
-            v2: Vec3A::new(v[6], v[7], v[8]),
+    let triangles: Vec<Triangle> = rays::read_triangles(&folder.join("triangles.f32"))
+        .unwrap_or_else(|e| panic!("{e}"))
+        .iter()
+        .map(|t| Triangle {
+            v0: t.v[0].into(),
+            v1: t.v[1].into(),
+            v2: t.v[2].into(),
         })
         .collect();
     let mut bvh = None;
@@ -95,16 +82,10 @@ fn main() {
         if !path.exists() {
             continue;
         }
-        let rays: Vec<Ray> = floats(&path)
-            .chunks_exact(8)
-            .map(|r| {
-                Ray::new(
-                    Vec3A::new(r[0], r[1], r[2]),
-                    Vec3A::new(r[4], r[5], r[6]),
-                    r[3],
-                    r[7],
-                )
-            })
+        let rays: Vec<Ray> = rays::read_file(&path)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .iter()
+            .map(obvhs_ray)
             .collect();
         let hits: Vec<RayHit> = pool.install(|| rays.par_iter().map(closest).collect());
         let hit_count = hits.iter().filter(|h| h.t < f32::INFINITY).count();

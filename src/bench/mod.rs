@@ -144,8 +144,8 @@ fn load(path: &Path) -> Result<(Vec<Triangle>, Option<Camera>)> {
     }
 }
 
-/// The median of `runs` timings of `f`, in seconds.
-fn median_seconds(runs: usize, mut f: impl FnMut()) -> f64 {
+/// The median of `runs` timings of `f` (at least one), in seconds.
+pub fn median_seconds(runs: usize, mut f: impl FnMut()) -> f64 {
     let mut times: Vec<f64> = (0..runs.max(1))
         .map(|_| {
             let start = Instant::now();

@@ -125,29 +125,50 @@ pub fn shadow(hits: &[HitPoint], bounds: Aabb) -> Vec<Ray> {
         .collect()
 }
 
-/// Reads rays from 32-byte little-endian records: origin x, y, z, tmin,
-/// direction x, y, z, tmax.
-pub fn read_file(path: &Path) -> Result<Vec<Ray>> {
+/// The little-endian f32s of a file of `floats`-float records named
+/// `what` in the error when the size is not a whole number of them.
+fn read_records(path: &Path, floats: usize, what: &str) -> Result<Vec<f32>> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    if bytes.len() % RECORD_BYTES != 0 {
+    let record_bytes = 4 * floats;
+    if bytes.len() % record_bytes != 0 {
         return Err(Error::Data {
             path: path.to_path_buf(),
             message: format!(
-                "{} bytes is not a whole number of {RECORD_BYTES}-byte ray records",
+                "{} bytes is not a whole number of {record_bytes}-byte {what} records",
                 bytes.len()
             ),
         });
     }
     Ok(bytes
-        .chunks_exact(RECORD_BYTES)
-        .map(|r| {
-            let f = |i: usize| f32::from_le_bytes(r[4 * i..4 * i + 4].try_into().unwrap());
-            Ray {
-                origin: Vec3::new(f(0), f(1), f(2)),
-                tmin: f(3),
-                dir: Vec3::new(f(4), f(5), f(6)),
-                tmax: f(7),
-            }
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect())
+}
+
+/// Reads rays from 32-byte little-endian records: origin x, y, z, tmin,
+/// direction x, y, z, tmax.
+pub fn read_file(path: &Path) -> Result<Vec<Ray>> {
+    Ok(read_records(path, RECORD_BYTES / 4, "ray")?
+        .chunks_exact(RECORD_BYTES / 4)
+        .map(|f| Ray {
+            origin: Vec3::new(f[0], f[1], f[2]),
+            tmin: f[3],
+            dir: Vec3::new(f[4], f[5], f[6]),
+            tmax: f[7],
+        })
+        .collect())
+}
+
+/// Reads triangles written by [`write_triangles`].
+pub fn read_triangles(path: &Path) -> Result<Vec<Triangle>> {
+    Ok(read_records(path, 9, "triangle")?
+        .chunks_exact(9)
+        .map(|f| Triangle {
+            v: [
+                Vec3::new(f[0], f[1], f[2]),
+                Vec3::new(f[3], f[4], f[5]),
+                Vec3::new(f[6], f[7], f[8]),
+            ],
         })
         .collect())
 }

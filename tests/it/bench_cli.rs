@@ -124,3 +124,55 @@ fn a_truncated_rays_file_is_an_error() {
         "{stderr}"
     );
 }
+
+#[test]
+fn saved_triangles_and_rays_read_back_exactly() {
+    use glam::Vec3;
+    use tracer::bench::rays;
+    use tracer::geometry::{Ray, Triangle};
+    let dir = tempfile::tempdir().unwrap();
+    let triangles = vec![
+        Triangle {
+            v: [
+                Vec3::new(0.1, -2.0, 3.5),
+                Vec3::X,
+                Vec3::new(1e-7, 4e5, -0.0),
+            ],
+        },
+        Triangle {
+            v: [Vec3::Y, Vec3::Z, Vec3::new(-1.5, 2.25, f32::MIN_POSITIVE)],
+        },
+    ];
+    let path = dir.path().join("triangles.f32");
+    rays::write_triangles(&path, &triangles).unwrap();
+    let back = rays::read_triangles(&path).unwrap();
+    assert_eq!(back.len(), 2);
+    for (a, b) in triangles.iter().zip(&back) {
+        for (p, q) in a.v.iter().zip(&b.v) {
+            assert_eq!(
+                p.to_array().map(f32::to_bits),
+                q.to_array().map(f32::to_bits)
+            );
+        }
+    }
+    let ray = Ray {
+        origin: Vec3::new(1.0, 2.0, 3.0),
+        dir: Vec3::new(0.0, 0.6, 0.8),
+        tmin: 1e-4,
+        tmax: 50.0,
+    };
+    let path = dir.path().join("some.rays");
+    rays::write_file(&path, &[ray, ray]).unwrap();
+    let read = rays::read_file(&path).unwrap();
+    assert_eq!(read.len(), 2);
+    assert_eq!(
+        (read[1].origin, read[1].dir, read[1].tmin, read[1].tmax),
+        (ray.origin, ray.dir, ray.tmin, ray.tmax)
+    );
+    // A triangle file cut short names the file and the record size.
+    std::fs::write(dir.path().join("cut.f32"), [0u8; 40]).unwrap();
+    let err = rays::read_triangles(&dir.path().join("cut.f32"))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("cut.f32") && err.contains("36-byte"), "{err}");
+}

@@ -21,6 +21,21 @@ const EMPTY_BOUNDS: [[f32; WIDTH]; 6] = [
     [f32::NEG_INFINITY; WIDTH],
 ];
 
+/// A node with no children yet: every slot empty.
+const EMPTY_NODE: WideNode = WideNode {
+    bounds: EMPTY_BOUNDS,
+    children: [EMPTY_CHILD; WIDTH],
+};
+
+/// Sets child `lane` of `node` to `reference`, with box `b`.
+fn set_lane(node: &mut WideNode, lane: usize, reference: u32, b: Aabb) {
+    node.children[lane] = reference;
+    for axis in 0..3 {
+        node.bounds[axis][lane] = b.min[axis];
+        node.bounds[3 + axis][lane] = b.max[axis];
+    }
+}
+
 /// Binary subtrees of at most this many triangles are collapsed as one
 /// task: small enough that a big mesh gives every thread many, large
 /// enough that the sequential top above them is a few hundred nodes.
@@ -183,20 +198,17 @@ impl<'a> Stretch<'a> {
 
 impl Sink for Stretch<'_> {
     fn node(&mut self) -> u32 {
-        self.nodes[self.next_node] = WideNode {
-            bounds: EMPTY_BOUNDS,
-            children: [EMPTY_CHILD; WIDTH],
-        };
+        self.nodes[self.next_node] = EMPTY_NODE;
         self.next_node += 1;
         (self.node_base + self.next_node - 1) as u32
     }
     fn set_child(&mut self, node: u32, lane: usize, reference: u32, b: Aabb) {
-        let n = &mut self.nodes[node as usize - self.node_base];
-        n.children[lane] = reference;
-        for axis in 0..3 {
-            n.bounds[axis][lane] = b.min[axis];
-            n.bounds[3 + axis][lane] = b.max[axis];
-        }
+        set_lane(
+            &mut self.nodes[node as usize - self.node_base],
+            lane,
+            reference,
+            b,
+        );
     }
     fn block(&mut self, leaf: usize) -> u32 {
         self.leaves[self.next_block] = leaf as u32;
@@ -214,19 +226,11 @@ struct Grow<'a> {
 
 impl Sink for Grow<'_> {
     fn node(&mut self) -> u32 {
-        self.nodes.push(WideNode {
-            bounds: EMPTY_BOUNDS,
-            children: [EMPTY_CHILD; WIDTH],
-        });
+        self.nodes.push(EMPTY_NODE);
         (self.nodes.len() - 1) as u32
     }
     fn set_child(&mut self, node: u32, lane: usize, reference: u32, b: Aabb) {
-        let n = &mut self.nodes[node as usize];
-        n.children[lane] = reference;
-        for axis in 0..3 {
-            n.bounds[axis][lane] = b.min[axis];
-            n.bounds[3 + axis][lane] = b.max[axis];
-        }
+        set_lane(&mut self.nodes[node as usize], lane, reference, b);
     }
     fn block(&mut self, leaf: usize) -> u32 {
         self.leaves.push(leaf as u32);
@@ -286,10 +290,10 @@ impl Collapser<'_> {
         (root, nodes, blocks)
     }
 
-    /// The sequential collapse: the same layout as the parallel one (the
-    /// top, then task after task), but each task is appended where the
-    /// last one ended, so only the top needs a dry run.
-    fn place_sequential(&self) -> (u32, Vec<WideNode>, Vec<u32>) {
+    /// A dry run of the top of the wide tree: the binary subtrees it leaves
+    /// to tasks, what the top itself emits, and whether the root is a task
+    /// (then the top is empty).
+    fn plan_top(&self) -> (Deferred, Count, bool) {
         let mut deferred = Deferred::default();
         let mut top = Count::default();
         let root_is_task = !self.is_leaf(0) && self.ranges[0].1 <= TASK_TRIANGLES;
@@ -298,6 +302,14 @@ impl Collapser<'_> {
         } else {
             self.emit(0, &mut top, Some(&mut deferred));
         }
+        (deferred, top, root_is_task)
+    }
+
+    /// The sequential collapse: the same layout as the parallel one (the
+    /// top, then task after task), but each task is appended where the
+    /// last one ended, so only the top needs a dry run.
+    fn place_sequential(&self) -> (u32, Vec<WideNode>, Vec<u32>) {
+        let (mut deferred, top, root_is_task) = self.plan_top();
         let mut nodes: Vec<WideNode> = bytemuck::zeroed_vec(top.nodes);
         let mut leaves = vec![0u32; top.blocks];
         let mut roots = Vec::with_capacity(deferred.subtrees.len());
@@ -326,14 +338,7 @@ impl Collapser<'_> {
     /// tasks write their parts at once.
     fn place_parallel(&self) -> (u32, Vec<WideNode>, Vec<u32>) {
         // Dry runs: the top, which lists the tasks, then every task.
-        let mut deferred = Deferred::default();
-        let mut top = Count::default();
-        let root_is_task = !self.is_leaf(0) && self.ranges[0].1 <= TASK_TRIANGLES;
-        if root_is_task {
-            deferred.subtrees.push(0);
-        } else {
-            self.emit(0, &mut top, Some(&mut deferred));
-        }
+        let (mut deferred, top, root_is_task) = self.plan_top();
         let count = |&subtree: &usize| {
             let mut n = Count::default();
             self.emit(subtree, &mut n, None);
