@@ -67,6 +67,8 @@ pub struct BenchOptions {
     /// Write each generated ray set here, in the rays-file format, and the
     /// triangles traced (`triangles.f32`), so other tools trace the same scene.
     pub save_rays: Option<PathBuf>,
+    /// Spatial-split budget of the builds ([`BuildOptions::spatial_split_budget`]).
+    pub spatial_split_budget: f32,
 }
 
 /// One timed BVH build.
@@ -117,6 +119,11 @@ pub struct BenchReport {
     pub nodes: usize,
     /// Leaf blocks (up to four triangles each).
     pub leaves: usize,
+    /// Triangle references in the leaf blocks: `triangles`, plus the
+    /// copies that spatial splits add.
+    pub references: usize,
+    /// The spatial-split budget the BVH was built with (0 for none).
+    pub spatial_split_budget: f32,
     /// Bytes of nodes and leaf blocks.
     pub memory_bytes: usize,
     /// `memory_bytes` / `triangles`.
@@ -206,6 +213,7 @@ pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
         let pool = worker_pool(Some(threads))?;
         let build_options = BuildOptions {
             parallel: threads > 1,
+            spatial_split_budget: options.spatial_split_budget,
             ..BuildOptions::default()
         };
         let seconds = median_seconds(options.runs.min(3), || {
@@ -215,7 +223,13 @@ pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
     }
     let bvh = match bvh {
         Some(b) => b,
-        None => WideBvh::build(&triangles),
+        None => WideBvh::build_with(
+            &triangles,
+            &BuildOptions {
+                spatial_split_budget: options.spatial_split_budget,
+                ..BuildOptions::default()
+            },
+        ),
     };
     let bounds = bvh.bounds();
     let sets = ray_sets(&bvh, &triangles, camera, bounds, options)?;
@@ -262,6 +276,8 @@ pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
         binary_sah_cost: report.binary_sah_cost,
         nodes: report.nodes,
         leaves: report.leaves,
+        references: report.references,
+        spatial_split_budget: options.spatial_split_budget,
         memory_bytes: bvh.memory_bytes(),
         bytes_per_triangle: bvh.memory_bytes() as f64 / triangles.len().max(1) as f64,
         traces,
@@ -322,6 +338,16 @@ impl BenchReport {
             "bvh        {}-wide: SAH cost {:.2} (binary before collapse {:.2}), {} nodes, {} leaves, {:.1} bytes/triangle",
             crate::bvh::wide::WIDTH, self.sah_cost, self.binary_sah_cost, self.nodes, self.leaves, self.bytes_per_triangle
         );
+        if self.spatial_split_budget > 0.0 {
+            let _ = writeln!(
+                s,
+                "splits     spatial, budget {}: {} references to {} triangles (+{:.1}%)",
+                self.spatial_split_budget,
+                self.references,
+                self.triangles,
+                100.0 * (self.references as f64 / self.triangles.max(1) as f64 - 1.0)
+            );
+        }
         let _ = writeln!(
             s,
             "{:<12} {:<8} {:>7} {:>9} {:>10} {:>9} {:>16}",

@@ -9,6 +9,8 @@
 //! pass computes both children's centroid bounds. Big subtrees are built in
 //! parallel with `rayon::join`.
 
+mod spatial;
+
 use super::{Bvh, Node, INTERSECTION_COST, TRAVERSAL_COST};
 use crate::geometry::{Aabb, Triangle};
 use glam::{Vec3, Vec4};
@@ -27,6 +29,10 @@ pub struct BuildOptions {
     pub max_leaf_size: usize,
     /// Build independent subtrees on the rayon pool the call runs in.
     pub parallel: bool,
+    /// Spatial splits (see `spatial.rs`): how many triangle references the
+    /// build may add by cutting triangles at split planes, as a fraction of
+    /// the triangle count. Zero builds over whole triangles only.
+    pub spatial_split_budget: f32,
 }
 
 impl Default for BuildOptions {
@@ -35,6 +41,7 @@ impl Default for BuildOptions {
             bins: 16,
             max_leaf_size: 4,
             parallel: true,
+            spatial_split_budget: 0.0,
         }
     }
 }
@@ -234,7 +241,11 @@ pub(super) fn build_tree(triangles: &[Triangle], options: &BuildOptions) -> (Vec
         bins: options.bins.clamp(2, MAX_BINS),
         max_leaf_size: options.max_leaf_size.max(1),
         parallel: options.parallel,
+        spatial_split_budget: options.spatial_split_budget,
     };
+    if options.spatial_split_budget > 0.0 && !prims.is_empty() {
+        return spatial::build_tree(triangles, prims, &options);
+    }
     // No root at all for no triangles: traversal checks for this and reports no hit.
     let nodes = if prims.is_empty() {
         Vec::new()
@@ -336,10 +347,7 @@ fn find_split(prims: &[Prim], range: Range, bins: usize, parallel: bool) -> Spli
     } else {
         bin_all(prims)
     };
-    let parent_area = {
-        let e = range.bounds.extent();
-        (e.x * e.y + e.y * e.z + e.z * e.x).max(f32::MIN_POSITIVE)
-    };
+    let parent_area = half_area(range.bounds).max(f32::MIN_POSITIVE);
     let mut best = Split {
         axis: 0,
         bin: 0,
@@ -368,13 +376,7 @@ fn find_split(prims: &[Prim], range: Range, bins: usize, parallel: bool) -> Spli
             if n == 0 || right_count == 0 {
                 continue;
             }
-            // Triangles are tested four at a time: a side costs one test per
-            // block of four, which steers splits towards full leaves.
-            let blocks = |n: u32| n.div_ceil(4) as f32;
-            let cost = TRAVERSAL_COST
-                + INTERSECTION_COST
-                    * (acc.half_area() * blocks(n) + right_area * blocks(right_count))
-                    / parent_area;
+            let cost = split_cost(acc.half_area(), n, right_area, right_count, parent_area);
             if cost < best.cost {
                 best = Split {
                     axis,
@@ -394,6 +396,23 @@ fn find_split(prims: &[Prim], range: Range, bins: usize, parallel: bool) -> Spli
             .aabb();
     }
     best
+}
+
+/// The SAH cost of a split into children of the given half areas and
+/// triangle counts, under a parent of half area `parent_area`. Triangles are
+/// tested four at a time: a side costs one test per block of four, which
+/// steers splits towards full leaves.
+#[inline(always)]
+fn split_cost(left_area: f32, left: u32, right_area: f32, right: u32, parent_area: f32) -> f32 {
+    let blocks = |n: u32| n.div_ceil(4) as f32;
+    TRAVERSAL_COST
+        + INTERSECTION_COST * (left_area * blocks(left) + right_area * blocks(right)) / parent_area
+}
+
+/// Half the surface area of `b` (zero for an empty box).
+fn half_area(b: Aabb) -> f32 {
+    let e = b.extent();
+    e.x * e.y + e.y * e.z + e.z * e.x
 }
 
 /// Moves the prims for which `goes_left` holds to the front; returns their

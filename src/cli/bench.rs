@@ -25,6 +25,10 @@ pub struct BenchArgs {
     /// Also write each generated ray set to DIR/<kind>.rays, for other tools.
     #[arg(long, value_name = "DIR")]
     pub save_rays: Option<PathBuf>,
+    /// Build with spatial splits, allowing this many extra triangle
+    /// references as a fraction of the triangle count (0 for none).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.0, value_parser = budget_fraction)]
+    pub spatial_splits: f32,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -45,6 +49,7 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
         threads,
         runs: args.runs as usize,
         save_rays: args.save_rays.clone(),
+        spatial_split_budget: args.spatial_splits,
     };
     let report = tracer::bench::run(&args.input, &options)?;
     if args.json {
@@ -55,4 +60,12 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
         print!("{}", report.table());
     }
     Ok(())
+}
+
+/// A spatial-split budget: a fraction from 0 to 16.
+fn budget_fraction(text: &str) -> std::result::Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(f) if (0.0..=16.0).contains(&f) => Ok(f),
+        _ => Err(format!("expected a number from 0 to 16, got {text:?}")),
+    }
 }

@@ -176,3 +176,53 @@ fn saved_triangles_and_rays_read_back_exactly() {
         .to_string();
     assert!(err.contains("cut.f32") && err.contains("36-byte"), "{err}");
 }
+
+/// `--spatial-splits` builds with a budget of extra references; the rays
+/// find exactly what they find without it, and a budget out of range is
+/// refused by name.
+#[test]
+fn spatial_splits_change_the_tree_not_the_hits() {
+    let _guard = common::heavy();
+    let run = |budget: &str| -> serde_json::Value {
+        let out = tracer()
+            .args(["bench", "scenes/textured.json", "--json", "--runs", "1"])
+            .args(["--threads", "1", "--rays", "incoherent", "--rays", "shadow"])
+            .args(["--spatial-splits", budget])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let (plain, split) = (run("0"), run("0.5"));
+    assert_eq!(plain["references"], plain["triangles"]);
+    assert!(split["references"].as_u64() > split["triangles"].as_u64());
+    assert_eq!(split["spatial_split_budget"], 0.5);
+    let answers = |r: &serde_json::Value| -> Vec<(String, u64, f64)> {
+        r["traces"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| {
+                let query = format!("{} {}", t["rays"], t["query"]);
+                (
+                    query,
+                    t["hits"].as_u64().unwrap(),
+                    t["distance_sum"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    assert_eq!(answers(&plain), answers(&split));
+
+    let out = tracer()
+        .args(["bench", "scenes/textured.json", "--spatial-splits", "17"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("--spatial-splits"), "{stderr}");
+}

@@ -154,6 +154,11 @@ fn random_soups_match_brute_force() {
                 bins: 4,
                 max_leaf_size: 1,
                 parallel: false,
+                spatial_split_budget: 0.0,
+            },
+            BuildOptions {
+                spatial_split_budget: 1.0,
+                ..BuildOptions::default()
             },
         ] {
             let bvh = Both::build_with(&tris, &options);
@@ -423,5 +428,110 @@ fn the_wide_bvh_bounds_are_exactly_the_triangles_bounds() {
             .fold(Aabb::EMPTY, |a, t| a.union(Aabb::from_points(&t.v)));
         let bounds = tracer::bvh::WideBvh::build(&triangles).bounds();
         assert_eq!((bounds.min, bounds.max), (union.min, union.max));
+    }
+}
+
+/// Long thin triangles crossing one another, in every orientation: where
+/// spatial splits pay.
+fn slivers(rng: &mut Rng, n: usize) -> Vec<Triangle> {
+    (0..n)
+        .map(|_| {
+            let a = rng.vec3(-10.0, 10.0);
+            let b = a + rng.vec3(-8.0, 8.0);
+            let c = a + rng.vec3(-0.3, 0.3);
+            Triangle::new(a, b, c)
+        })
+        .collect()
+}
+
+/// Spatial splits cut triangles, and a cut triangle is found through
+/// either of its references exactly as brute force finds it: closest hits,
+/// any hits, both BVHs, rays in every direction and aimed at vertices and
+/// edges, where a clipped box that rounding had shrunk would lose hits.
+#[test]
+fn spatial_splits_find_exactly_what_brute_force_finds() {
+    let mut rng = Rng::new(23);
+    // A city's ground plane and tall thin buildings, crossed by slivers.
+    let mut tris: Vec<Triangle> = tracer::bench::meshes::city(16)
+        .iter()
+        .map(|t| {
+            Triangle::new(
+                t.v[0] - Vec3::new(8.0, 2.0, 8.0),
+                t.v[1] - Vec3::new(8.0, 2.0, 8.0),
+                t.v[2] - Vec3::new(8.0, 2.0, 8.0),
+            )
+        })
+        .collect();
+    tris.extend(slivers(&mut rng, 300));
+    let plain = WideBvh::build(&tris);
+    let options = BuildOptions {
+        spatial_split_budget: 0.5,
+        ..BuildOptions::default()
+    };
+    let bvh = Both::build_with(&tris, &options);
+    let report = bvh.wide.report();
+    assert_eq!(report.triangles, tris.len());
+    assert!(
+        report.references > tris.len() + tris.len() / 20,
+        "spatial splits added only {} references",
+        report.references - tris.len()
+    );
+    assert!(report.references <= tris.len() + tris.len() / 2);
+    assert!(
+        report.sah_cost < 0.95 * plain.report().sah_cost,
+        "SAH cost {} with spatial splits, {} without",
+        report.sah_cost,
+        plain.report().sah_cost
+    );
+    for k in 0..4000 {
+        let ray = if k % 2 == 0 {
+            random_ray(&mut rng, k)
+        } else {
+            let t = tris[k % tris.len()];
+            let target = match k % 3 {
+                0 => t.v[k % 3],
+                1 => 0.5 * (t.v[0] + t.v[1]),
+                _ => t.point(rng.f32() * 0.5, rng.f32() * 0.5),
+            };
+            let origin = rng.vec3(-15.0, 15.0);
+            Ray::new(origin, (target - origin).normalize())
+        };
+        bvh.intersect(&ray);
+        assert_same(&tris, &bvh, &ray);
+    }
+}
+
+/// With spatial splits too, the tree is a function of the triangles: built
+/// on many threads or one, node for node the same.
+#[test]
+fn spatial_split_builds_do_not_depend_on_threads() {
+    let _guard = common::heavy();
+    let mut rng = Rng::new(5);
+    let mut tris = slivers(&mut rng, 40_000);
+    tris.extend(soup(&mut rng, 40_000, 0.05));
+    let options = |parallel| BuildOptions {
+        parallel,
+        spatial_split_budget: 0.3,
+        ..BuildOptions::default()
+    };
+    let parallel = Bvh::build_with(&tris, &options(true));
+    let sequential = Bvh::build_with(&tris, &options(false));
+    assert!(parallel.triangle_count() > tris.len());
+    assert!(parallel.nodes() == sequential.nodes());
+    let wide = WideBvh::build_with(&tris, &options(true));
+    let wide_sequential = WideBvh::build_with(&tris, &options(false));
+    assert_eq!(wide.nodes().len(), wide_sequential.nodes().len());
+    for (a, b) in wide.nodes().iter().zip(wide_sequential.nodes()) {
+        assert_eq!((a.children, a.bounds), (b.children, b.bounds));
+    }
+    for (a, b) in wide.blocks().iter().zip(wide_sequential.blocks()) {
+        assert_eq!((a.id, a.v), (b.id, b.v));
+    }
+    let both = Both {
+        binary: parallel,
+        wide,
+    };
+    for k in 0..1000 {
+        assert_same(&tris, &both, &random_ray(&mut rng, k));
     }
 }

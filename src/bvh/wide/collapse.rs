@@ -93,6 +93,7 @@ impl WideBvh {
                 nodes: nodes.len(),
                 leaves: blocks.len(),
                 triangles: order.len(),
+                references: order.len(),
                 ..BuildReport::default()
             },
             nodes: nodes.into(),

@@ -83,6 +83,9 @@ pub struct BuildReport {
     pub leaves: usize,
     /// Number of triangles built over.
     pub triangles: usize,
+    /// Triangle references in the leaves: `triangles`, or more where
+    /// spatial splits cut triangles in two.
+    pub references: usize,
 }
 
 /// The 8-wide BVH the integrators trace, with its triangles in leaf blocks.
@@ -113,6 +116,7 @@ impl WideBvh {
         };
         let (binary, order) = super::build::build_tree(triangles, &options);
         let mut wide = WideBvh::collapse(&binary, &order, triangles, options.parallel);
+        wide.report.triangles = triangles.len();
         wide.report.seconds = start.elapsed().as_secs_f64();
         wide
     }

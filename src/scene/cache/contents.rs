@@ -386,6 +386,12 @@ pub(super) fn read_entry(
         nodes: nodes.len(),
         leaves: blocks.len(),
         triangles: count,
+        references: blocks
+            .iter()
+            .map(|b: &crate::bvh::wide::TriangleBlock| {
+                b.id.iter().filter(|&&id| id != u32::MAX).count()
+            })
+            .sum(),
     };
     let bvh = WideBvh::from_parts(nodes, blocks, meta.bvh_root, bounds, report, count)
         .map_err(|e| malformed(format!("BVH: {e}")))?;
