@@ -22,7 +22,12 @@ pass). With more than one thread the rays are split into one contiguous
 range per thread, traced from Python threads (embreex releases the GIL
 around its loop).
 
+With `--spatial-splits FRACTION`, tracer also traces the saved rays
+through a second BVH built with spatial splits (`tracer bench
+--spatial-splits`), and the table gains its figures and ratio to Embree.
+
     benches/peers/embree.py ../shared/meshes/dragon.obj --threads 1,2
+    benches/peers/embree.py ../shared/meshes/sponza.obj --spatial-splits 0.3
     benches/peers/embree.py scenes/cornell-box.json --runs 3 --out target/embree
 
 Needs `pip install embreex==4.4.0.post1 numpy` (requirements.txt).
@@ -151,10 +156,31 @@ def tracer_bench(tracer, source, folder, threads, runs):
     return json.loads(out.stdout)
 
 
-def table(ours, embree, obvhs):
+def tracer_bench_split(tracer, source, folder, threads, runs, budget):
+    """tracer with spatial splits, tracing the ray files the first run saved."""
+    report = None
+    for name in SETS:
+        path = os.path.join(folder, f"{name}.rays")
+        if not os.path.exists(path):
+            continue
+        cmd = [tracer, "bench", source, "--json", "--runs", str(runs), "--rays-file", path,
+               "--threads", ",".join(map(str, threads)), "--spatial-splits", str(budget)]
+        out = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
+        if report is None:
+            report = out
+        else:
+            report["traces"] += out["traces"]
+    return report
+
+
+def table(ours, embree, obvhs, split=None):
     lines = ["| rays | query | threads | tracer Mrays/s | Embree Mrays/s | obvhs Mrays/s "
              "| tracer / Embree | tracer / obvhs | hits (tracer, Embree, obvhs) | distance sums |",
              "|---|---|---:|---:|---:|---:|---:|---:|---|---|"]
+    if split:
+        lines[0] += " tracer, spatial splits, Mrays/s | spatial splits / Embree | hits |"
+        lines[1] += "---:|---:|---|"
+    splits = {(t["rays"], t["query"], t["threads"]): t for t in split["traces"]} if split else {}
     theirs = {(t["rays"], t["query"], t["threads"]): t for e in embree for t in e["traces"]}
     others = {(t["rays"], t["query"], t["threads"]): t for o in obvhs for t in o["traces"]}
     for t in ours["traces"]:
@@ -174,11 +200,24 @@ def table(ours, embree, obvhs):
         mine = t["mrays_per_second"]
         obvhs_cells = (f"{o['mrays_per_second']:.2f}", f"{mine / o['mrays_per_second']:.2f}") \
             if o else ("-", "-")
-        lines.append(f"| {t['rays']} | {t['query']} | {t['threads']} | {mine:.2f} | "
-                     f"{e['mrays_per_second']:.2f} | {obvhs_cells[0]} | "
-                     f"{mine / e['mrays_per_second']:.2f} | {obvhs_cells[1]} | {same} | {sums} |")
+        row = (f"| {t['rays']} | {t['query']} | {t['threads']} | {mine:.2f} | "
+               f"{e['mrays_per_second']:.2f} | {obvhs_cells[0]} | "
+               f"{mine / e['mrays_per_second']:.2f} | {obvhs_cells[1]} | {same} | {sums} |")
+        if split:
+            sp = splits.get(key)
+            if sp:
+                agree = "equal" if sp["hits"] == e["hits"] else f"{sp['hits']}, Embree {e['hits']}"
+                row += (f" {sp['mrays_per_second']:.2f} | "
+                        f"{sp['mrays_per_second'] / e['mrays_per_second']:.2f} | {agree} |")
+            else:
+                row += " - | - | - |"
+        lines.append(row)
     lines += ["", "| build | threads | tracer s | Embree s | obvhs s | Embree / tracer | obvhs / tracer |",
               "|---|---:|---:|---:|---:|---:|---:|"]
+    if split:
+        lines[-2] += " tracer, spatial splits, s | Embree / spatial splits | references |"
+        lines[-1] += "---:|---:|---:|"
+    split_builds = {b["threads"]: b["seconds"] for b in split["builds"]} if split else {}
     builds = {e["threads"]: e["build_seconds"] for e in embree}
     obvhs_builds = {o["threads"]: o["build_seconds"] for o in obvhs}
     for b in ours["builds"]:
@@ -186,8 +225,14 @@ def table(ours, embree, obvhs):
             e = builds[b["threads"]]
             o = obvhs_builds.get(b["threads"])
             cells = (f"{o:.3f}", f"{o / b['seconds']:.2f}") if o else ("-", "-")
-            lines.append(f"| {ours['triangles']} triangles | {b['threads']} | {b['seconds']:.3f} | "
-                         f"{e:.3f} | {cells[0]} | {e / b['seconds']:.2f} | {cells[1]} |")
+            row = (f"| {ours['triangles']} triangles | {b['threads']} | {b['seconds']:.3f} | "
+                   f"{e:.3f} | {cells[0]} | {e / b['seconds']:.2f} | {cells[1]} |")
+            if split:
+                sb = split_builds.get(b["threads"])
+                extra = split["references"] / split["triangles"] - 1
+                row += (f" {sb:.3f} | {e / sb:.2f} | +{100 * extra:.1f}% |" if sb
+                        else " - | - | - |")
+            lines.append(row)
     return "\n".join(lines)
 
 
@@ -202,6 +247,8 @@ def main(argv=None):
                     help="the obvhs_rays example binary")
     ap.add_argument("--no-obvhs", action="store_true", help="leave obvhs out")
     ap.add_argument("--no-build", action="store_true", help="do not run cargo build --release")
+    ap.add_argument("--spatial-splits", type=float, metavar="FRACTION",
+                    help="also trace with a BVH built with spatial splits, this reference budget")
     args = ap.parse_args(argv)
     threads = [int(t) for t in args.threads.split(",")]
     if not args.no_build:
@@ -217,7 +264,9 @@ def main(argv=None):
     }
     md = [f"# tracer against Embree\n\n- date: {report['date']}\n- machine: {report['machine']}\n"
           f"- {report['tracer']}; embreex {report['embreex']} (Embree 4.4); obvhs {obvhs_version()} (CWBVH, fast_build)\n"
-          f"- medians of {args.runs} runs; Mrays/s = rays / seconds\n"]
+          f"- medians of {args.runs} runs; Mrays/s = rays / seconds\n"
+          + (f"- spatial splits: reference budget {args.spatial_splits}\n"
+             if args.spatial_splits is not None else "")]
     for source in args.inputs:
         name = os.path.splitext(os.path.basename(source))[0]
         folder = os.path.join(args.out, name)
@@ -225,8 +274,11 @@ def main(argv=None):
         ours = tracer_bench(args.tracer, source, folder, threads, args.runs)
         embree = [run_worker(folder, t, args.runs) for t in threads]
         obvhs = [] if args.no_obvhs else [run_obvhs(args.obvhs, folder, t, args.runs) for t in threads]
-        report["inputs"].append({"input": source, "tracer": ours, "embree": embree, "obvhs": obvhs})
-        text = table(ours, embree, obvhs)
+        split = None if args.spatial_splits is None else tracer_bench_split(
+            args.tracer, source, folder, threads, args.runs, args.spatial_splits)
+        report["inputs"].append({"input": source, "tracer": ours, "embree": embree, "obvhs": obvhs,
+                                 "tracer_spatial_splits": split})
+        text = table(ours, embree, obvhs, split)
         print(text, flush=True)
         md.append(f"## {source} ({ours['triangles']} triangles)\n\n{text}\n")
     with open(os.path.join(args.out, "results.json"), "w") as f:
