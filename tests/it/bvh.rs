@@ -535,3 +535,21 @@ fn spatial_split_builds_do_not_depend_on_threads() {
         assert_same(&tris, &both, &random_ray(&mut rng, k));
     }
 }
+
+/// Big trees are traversed with prefetches of the children a ray defers;
+/// the hits are the same with and without them.
+#[test]
+fn prefetching_traversal_finds_the_same_hits() {
+    let mut rng = Rng::new(31);
+    let tris = soup(&mut rng, 3000, 0.7);
+    let mut bvh = Both::build(&tris);
+    assert!(!bvh.wide.prefetches(), "a small tree stays in the caches");
+    bvh.wide.set_prefetch(true);
+    for k in 0..3000 {
+        let mut ray = random_ray(&mut rng, k);
+        if k % 5 == 0 {
+            ray.tmax = rng.range(0.0, 20.0);
+        }
+        assert_same(&tris, &bvh, &ray);
+    }
+}

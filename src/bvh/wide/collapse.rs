@@ -98,7 +98,9 @@ impl WideBvh {
             },
             nodes: nodes.into(),
             blocks: blocks.into(),
+            prefetch: false,
         };
+        wide.prefetch = wide.memory_bytes() >= super::PREFETCH_MIN_BYTES;
         wide.report.sah_cost = wide.sah_cost();
         wide
     }

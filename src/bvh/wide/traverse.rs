@@ -220,8 +220,59 @@ impl RayLanes {
 }
 
 impl WideBvh {
+    /// Asks the cache for the node or leaf block `reference` names, which
+    /// the traversal will visit soon: its first lines are then on the way
+    /// while the current node's other children are handled.
+    #[inline(always)]
+    fn prefetch_reference(&self, reference: u32) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let (address, bytes): (*const u8, usize) = if reference & LEAF_BIT == 0 {
+                (
+                    self.nodes.as_ptr().wrapping_add(reference as usize).cast(),
+                    std::mem::size_of::<WideNode>(),
+                )
+            } else {
+                (
+                    self.blocks
+                        .as_ptr()
+                        .wrapping_add((reference & LEAF_INDEX_MASK) as usize)
+                        .cast(),
+                    std::mem::size_of::<TriangleBlock>(),
+                )
+            };
+            for offset in (0..bytes).step_by(64) {
+                // SAFETY: a prefetch is a hint; it reads nothing, and an
+                // address past the end only fetches a line in vain.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(address.wrapping_add(offset).cast()) };
+            }
+        }
+    }
+
     /// The closest hit with `ray.tmin < t < ray.tmax`.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if self.prefetch {
+            self.closest_hit::<true>(ray)
+        } else {
+            self.closest_hit::<false>(ray)
+        }
+    }
+
+    /// Whether anything lies on the ray within (tmin, tmax): for shadow
+    /// rays, so it stops at the first hit it finds, in whatever order.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if self.prefetch {
+            self.any_hit::<true>(ray)
+        } else {
+            self.any_hit::<false>(ray)
+        }
+    }
+
+    /// `intersect`, prefetching the children it puts on the stack when
+    /// `PREFETCH` is set.
+    #[inline(always)]
+    fn closest_hit<const PREFETCH: bool>(&self, ray: &Ray) -> Option<Hit> {
         if self.root == EMPTY_CHILD {
             return None;
         }
@@ -256,6 +307,9 @@ impl WideBvh {
                 }
                 if count > 0 {
                     for &entry in order[1..count].iter().rev() {
+                        if PREFETCH {
+                            self.prefetch_reference(entry.0);
+                        }
                         stack.push(entry);
                     }
                     current = order[0].0;
@@ -291,9 +345,9 @@ impl WideBvh {
         }
     }
 
-    /// Whether anything lies on the ray within (tmin, tmax): for shadow
-    /// rays, so it stops at the first hit it finds, in whatever order.
-    pub fn occluded(&self, ray: &Ray) -> bool {
+    /// `occluded`, prefetching as `closest_hit` does.
+    #[inline(always)]
+    fn any_hit<const PREFETCH: bool>(&self, ray: &Ray) -> bool {
         if self.root == EMPTY_CHILD {
             return false;
         }
@@ -308,6 +362,9 @@ impl WideBvh {
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
+                    if PREFETCH {
+                        self.prefetch_reference(node.children[lane]);
+                    }
                     stack.push(node.children[lane]);
                 }
             } else {
