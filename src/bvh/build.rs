@@ -104,6 +104,13 @@ impl Box4 {
         max: Vec4::splat(f32::NEG_INFINITY),
     };
 
+    fn of(b: Aabb) -> Box4 {
+        Box4 {
+            min: b.min.extend(0.0),
+            max: b.max.extend(0.0),
+        }
+    }
+
     #[inline(always)]
     fn grow(&mut self, p: &Prim) {
         self.min = self.min.min(p.min);
@@ -360,7 +367,9 @@ fn find_split(prims: &[Prim], range: Range, bins: usize, parallel: bool) -> Spli
         if extent[axis] <= 0.0 {
             continue;
         }
-        // Sweep from the right, then from the left, evaluating each plane once.
+        // Sweep from the right, then from the left, evaluating each plane
+        // once. (`spatial::sweep` does the same for spatial bins; written out
+        // here, the object-only build took 10% fewer instructions.)
         let mut right = [(0f32, 0u32); MAX_BINS];
         let (mut acc, mut n) = (Box4::EMPTY, 0);
         for k in (1..bins).rev() {
@@ -478,31 +487,40 @@ fn build_subtree(
         || build_subtree(options, left_prims, left_range, offset, depth + 1),
         || build_subtree(options, right_prims, right_range, offset + mid, depth + 1),
     );
-    // Layout: [root, left root, right root, rest of left, rest of right],
-    // exactly what the sequential builder produces.
+    join_subtrees(range.bounds, &left, &right, 0)
+}
+
+/// The nodes of a subtree with root box `bounds` whose two children were
+/// built apart (each root first): [root, left root, right root, rest of
+/// left, rest of right], exactly what the sequential builders produce.
+/// The right subtree's leaves move `right_leaf_shift` further along the
+/// leaf order.
+fn join_subtrees(bounds: Aabb, left: &[Node], right: &[Node], right_leaf_shift: u32) -> Vec<Node> {
     let left_index = |i: u32| if i == 0 { 1 } else { i + 2 };
     let right_shift = left.len() as u32 + 1;
     let right_index = |i: u32| if i == 0 { 2 } else { i + right_shift };
-    let relink = |n: &Node, map: &dyn Fn(u32) -> u32| {
-        if n.is_leaf() {
-            *n
+    let relink = |n: &Node, map: &dyn Fn(u32) -> u32, leaf_shift: u32| {
+        let first = if n.is_leaf() {
+            n.first + leaf_shift
         } else {
-            Node {
-                first: map(n.first),
-                ..*n
-            }
-        }
+            map(n.first)
+        };
+        Node { first, ..*n }
     };
     let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
     nodes.push(Node {
-        bounds: range.bounds,
+        bounds,
         first: 1,
         count: 0,
     });
-    nodes.push(relink(&left[0], &left_index));
-    nodes.push(relink(&right[0], &right_index));
-    nodes.extend(left[1..].iter().map(|n| relink(n, &left_index)));
-    nodes.extend(right[1..].iter().map(|n| relink(n, &right_index)));
+    nodes.push(relink(&left[0], &left_index, 0));
+    nodes.push(relink(&right[0], &right_index, right_leaf_shift));
+    nodes.extend(left[1..].iter().map(|n| relink(n, &left_index, 0)));
+    nodes.extend(
+        right[1..]
+            .iter()
+            .map(|n| relink(n, &right_index, right_leaf_shift)),
+    );
     nodes
 }
 

@@ -184,17 +184,21 @@ fn saved_triangles_and_rays_read_back_exactly() {
 fn spatial_splits_change_the_tree_not_the_hits() {
     let _guard = common::heavy();
     let run = |budget: &str| -> serde_json::Value {
-        let out = tracer()
-            .args(["bench", "scenes/textured.json", "--json", "--runs", "1"])
-            .args(["--threads", "1", "--rays", "incoherent", "--rays", "shadow"])
-            .args(["--spatial-splits", budget])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = common::run(&[
+            "bench",
+            "scenes/textured.json",
+            "--json",
+            "--runs",
+            "1",
+            "--threads",
+            "1",
+            "--rays",
+            "incoherent",
+            "--rays",
+            "shadow",
+            "--spatial-splits",
+            budget,
+        ]);
         serde_json::from_slice(&out.stdout).unwrap()
     };
     let (plain, split) = (run("0"), run("0.5"));

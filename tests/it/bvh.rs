@@ -319,6 +319,18 @@ fn sah_cost_is_reported_and_sensible() {
     assert_eq!(ids.len(), 5000, "every triangle in exactly one leaf");
 }
 
+/// Two wide BVHs with the same nodes and leaf blocks, in the same places.
+fn assert_same_layout(a: &WideBvh, b: &WideBvh) {
+    assert_eq!(a.nodes().len(), b.nodes().len());
+    for (a, b) in a.nodes().iter().zip(b.nodes()) {
+        assert_eq!((a.children, a.bounds), (b.children, b.bounds));
+    }
+    assert_eq!(a.blocks().len(), b.blocks().len());
+    for (a, b) in a.blocks().iter().zip(b.blocks()) {
+        assert_eq!((a.id, a.v), (b.id, b.v));
+    }
+}
+
 /// Subtrees built in parallel are laid out exactly as the sequential builder
 /// lays them out: the tree is a function of the triangles, not of the threads.
 #[test]
@@ -346,14 +358,7 @@ fn parallel_build_equals_sequential_build() {
             ..BuildOptions::default()
         },
     );
-    assert_eq!(wide.nodes().len(), wide_sequential.nodes().len());
-    for (a, b) in wide.nodes().iter().zip(wide_sequential.nodes()) {
-        assert_eq!((a.children, a.bounds), (b.children, b.bounds));
-    }
-    assert_eq!(wide.blocks().len(), wide_sequential.blocks().len());
-    for (a, b) in wide.blocks().iter().zip(wide_sequential.blocks()) {
-        assert_eq!((a.id, a.v), (b.id, b.v));
-    }
+    assert_same_layout(&wide, &wide_sequential);
     let both = Both {
         binary: parallel,
         wide,
@@ -520,13 +525,7 @@ fn spatial_split_builds_do_not_depend_on_threads() {
     assert!(parallel.nodes() == sequential.nodes());
     let wide = WideBvh::build_with(&tris, &options(true));
     let wide_sequential = WideBvh::build_with(&tris, &options(false));
-    assert_eq!(wide.nodes().len(), wide_sequential.nodes().len());
-    for (a, b) in wide.nodes().iter().zip(wide_sequential.nodes()) {
-        assert_eq!((a.children, a.bounds), (b.children, b.bounds));
-    }
-    for (a, b) in wide.blocks().iter().zip(wide_sequential.blocks()) {
-        assert_eq!((a.id, a.v), (b.id, b.v));
-    }
+    assert_same_layout(&wide, &wide_sequential);
     let both = Both {
         binary: parallel,
         wide,

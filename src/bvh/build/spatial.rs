@@ -17,8 +17,8 @@
 //! spatial split can grow their number.
 
 use super::{
-    find_split, half_area, measure, median_split, partition, split_cost, Binner, Box4,
-    BuildOptions, Prim, Range, MAX_SAH_DEPTH, PARALLEL_MIN, UNSET,
+    find_split, half_area, join_subtrees, measure, median_split, partition, split_cost, Binner,
+    Box4, BuildOptions, Prim, Range, MAX_BINS, MAX_SAH_DEPTH, PARALLEL_MIN, UNSET,
 };
 use crate::bvh::Node;
 use crate::geometry::{Aabb, Triangle};
@@ -27,6 +27,7 @@ use rayon::prelude::*;
 
 /// Candidate planes per axis, evenly spaced across the node's box.
 const SPATIAL_BINS: usize = 16;
+const _: () = assert!(SPATIAL_BINS <= MAX_BINS, "the sweep holds MAX_BINS planes");
 
 /// Spatial splits are weighed only where the best object split's children
 /// overlap by more than this fraction of the root's area (Stich et al.'s
@@ -51,7 +52,7 @@ struct Task {
 }
 
 enum Outcome {
-    Leaf(Task),
+    Leaf(Vec<Prim>),
     Split(Task, Task),
 }
 
@@ -226,36 +227,14 @@ impl Builder<'_> {
             return self.sequential(task);
         }
         let bounds = task.range.bounds;
-        let (left, right) = match self.split(task) {
-            Outcome::Leaf(t) => return leaf(bounds, 0, &t.prims),
+        let ((left, left_order), (right, right_order)) = match self.split(task) {
+            Outcome::Leaf(prims) => {
+                let order = prims.iter().map(Prim::index).collect();
+                return (vec![leaf(bounds, 0, &prims)], order);
+            }
             Outcome::Split(l, r) => rayon::join(|| self.subtree(l), || self.subtree(r)),
         };
-        let ((left, left_order), (right, right_order)) = (left, right);
-        // Layout: [root, left root, right root, rest of left, rest of
-        // right], as the sequential builder lays it out; the right
-        // subtree's leaves move past the left's triangles.
-        let left_index = |i: u32| if i == 0 { 1 } else { i + 2 };
-        let right_shift = left.len() as u32 + 1;
-        let right_index = |i: u32| if i == 0 { 2 } else { i + right_shift };
-        let shift = left_order.len() as u32;
-        let relink = |n: &Node, map: &dyn Fn(u32) -> u32, leaf_shift: u32| {
-            let first = if n.is_leaf() {
-                n.first + leaf_shift
-            } else {
-                map(n.first)
-            };
-            Node { first, ..*n }
-        };
-        let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
-        nodes.push(Node {
-            bounds,
-            first: 1,
-            count: 0,
-        });
-        nodes.push(relink(&left[0], &left_index, 0));
-        nodes.push(relink(&right[0], &right_index, shift));
-        nodes.extend(left[1..].iter().map(|n| relink(n, &left_index, 0)));
-        nodes.extend(right[1..].iter().map(|n| relink(n, &right_index, shift)));
+        let nodes = join_subtrees(bounds, &left, &right, left_order.len() as u32);
         let mut order = left_order;
         order.extend(right_order);
         (nodes, order)
@@ -270,10 +249,9 @@ impl Builder<'_> {
         while let Some((node, task)) = work.pop() {
             let bounds = task.range.bounds;
             match self.split(task) {
-                Outcome::Leaf(t) => {
-                    let (leaf, ids) = leaf(bounds, order.len(), &t.prims);
-                    nodes[node] = leaf[0];
-                    order.extend(ids);
+                Outcome::Leaf(prims) => {
+                    nodes[node] = leaf(bounds, order.len(), &prims);
+                    order.extend(prims.iter().map(Prim::index));
                 }
                 Outcome::Split(l, r) => {
                     let left = nodes.len();
@@ -301,16 +279,11 @@ impl Builder<'_> {
         } = task;
         let count = prims.len();
         if count <= self.options.max_leaf_size {
-            return Outcome::Leaf(Task {
-                prims,
-                range,
-                depth,
-                budget,
-            });
+            return Outcome::Leaf(prims);
         }
         if depth >= MAX_SAH_DEPTH || range.centroids.extent().max_element() <= 0.0 {
             let (mid, left, right) = median_split(&mut prims, range);
-            return halves(prims, mid, left, right, depth, budget);
+            return object_children(prims, mid, left, right, depth, budget);
         }
         let bins = self.options.bins.min(count.max(4));
         let object = find_split(&prims, range, bins, self.options.parallel);
@@ -330,7 +303,7 @@ impl Builder<'_> {
             partition(&mut prims, |p| binner.below(p.centroid2(), axis, bin));
         if mid == 0 || mid == count {
             let (mid, left, right) = median_split(&mut prims, range);
-            return halves(prims, mid, left, right, depth, budget);
+            return object_children(prims, mid, left, right, depth, budget);
         }
         let left = Range {
             bounds: object.left,
@@ -340,7 +313,7 @@ impl Builder<'_> {
             bounds: object.right,
             centroids: right_centroids,
         };
-        halves(prims, mid, left, right, depth, budget)
+        object_children(prims, mid, left, right, depth, budget)
     }
 
     /// Bins the parts of every reference into `SPATIAL_BINS` slabs along
@@ -375,22 +348,8 @@ impl Builder<'_> {
             if extent[axis] <= 0.0 {
                 continue;
             }
-            let mut right = [(0f32, 0u32); SPATIAL_BINS];
-            let (mut acc, mut n) = (Box4::EMPTY, 0);
-            for k in (1..SPATIAL_BINS).rev() {
-                acc = acc.union(bins[k].bounds);
-                n += bins[k].exits;
-                right[k] = (acc.half_area(), n);
-            }
-            let (mut acc, mut n) = (Box4::EMPTY, 0);
-            for k in 1..SPATIAL_BINS {
-                acc = acc.union(bins[k - 1].bounds);
-                n += bins[k - 1].entries;
-                let (right_area, right_count) = right[k];
-                if n == 0 || right_count == 0 {
-                    continue;
-                }
-                let cost = split_cost(acc.half_area(), n, right_area, right_count, parent_area);
+            let counted = |k: usize| (bins[k].bounds, bins[k].entries, bins[k].exits);
+            if let Some((k, cost, _)) = sweep(SPATIAL_BINS, counted, parent_area) {
                 if best.as_ref().is_none_or(|b| cost < b.cost) {
                     best = Some(SpatialSplit {
                         axis,
@@ -434,7 +393,7 @@ impl Builder<'_> {
                     let hi = at(k + 1);
                     let part = slices.piece(lo, hi, b);
                     if !part.is_empty() {
-                        bin.bounds.grow(&Prim::new(part, 0));
+                        bin.bounds = bin.bounds.union(Box4::of(part));
                     }
                     lo = hi;
                 }
@@ -504,6 +463,45 @@ impl Builder<'_> {
     }
 }
 
+/// The cheapest of the planes between `bins` bins along one axis, where
+/// plane `k` puts bins `0..k` on the left: its index, SAH cost and left
+/// box. `bin(k)` gives bin `k`'s box and the references it adds to the
+/// left side when below the plane and to the right side when above it
+/// (those starting in it on the left, those ending in it on the right).
+/// One sweep from the right, then one from the left, costs each plane
+/// once; ties go to the lowest plane. `find_split` sweeps whole references
+/// the same way, written out.
+#[inline(always)]
+fn sweep(
+    bins: usize,
+    bin: impl Fn(usize) -> (Box4, u32, u32),
+    parent_area: f32,
+) -> Option<(usize, f32, Aabb)> {
+    let mut right = [(0f32, 0u32); MAX_BINS];
+    let (mut acc, mut n) = (Box4::EMPTY, 0);
+    for k in (1..bins).rev() {
+        let (bounds, _, count) = bin(k);
+        acc = acc.union(bounds);
+        n += count;
+        right[k] = (acc.half_area(), n);
+    }
+    let mut best: Option<(usize, f32, Aabb)> = None;
+    let (mut acc, mut n) = (Box4::EMPTY, 0);
+    for (k, &(right_area, right_count)) in right.iter().enumerate().take(bins).skip(1) {
+        let (bounds, count, _) = bin(k - 1);
+        acc = acc.union(bounds);
+        n += count;
+        if n == 0 || right_count == 0 {
+            continue;
+        }
+        let cost = split_cost(acc.half_area(), n, right_area, right_count, parent_area);
+        if best.is_none_or(|(_, c, _)| cost < c) {
+            best = Some((k, cost, acc.aabb()));
+        }
+    }
+    best
+}
+
 /// Plane `k` of the `SPATIAL_BINS + 1` evenly spaced across `bounds` along
 /// `axis`; the first and last are the box's own faces, exactly.
 fn plane(bounds: Aabb, axis: usize, k: usize) -> f32 {
@@ -521,7 +519,7 @@ fn share(budget: usize, left: usize, right: usize) -> (usize, usize) {
 }
 
 /// The two children of an object split: the first `mid` references go left.
-fn halves(
+fn object_children(
     mut prims: Vec<Prim>,
     mid: usize,
     left: Range,
@@ -547,15 +545,11 @@ fn halves(
     )
 }
 
-/// A leaf over `prims` whose first triangle sits at `first` in leaf order,
-/// with the triangle index of each reference.
-fn leaf(bounds: Aabb, first: usize, prims: &[Prim]) -> (Vec<Node>, Vec<u32>) {
-    (
-        vec![Node {
-            bounds,
-            first: first as u32,
-            count: prims.len() as u32,
-        }],
-        prims.iter().map(Prim::index).collect(),
-    )
+/// A leaf over `prims` whose first triangle sits at `first` in leaf order.
+fn leaf(bounds: Aabb, first: usize, prims: &[Prim]) -> Node {
+    Node {
+        bounds,
+        first: first as u32,
+        count: prims.len() as u32,
+    }
 }
