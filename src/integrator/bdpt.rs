@@ -224,6 +224,7 @@ pub(super) fn start_camera_walk(
         origin: ray.origin,
         dir: ray.dir,
         throughput: Rgb::ONE,
+        roulette_scale: 1.0,
         length: 1,
         // Eq. 31 for the camera: the light tracer's density relative to this one.
         d_vcm: mis(light_paths_per_pass(camera) / camera_pdf),

@@ -40,6 +40,14 @@ pub struct Walk {
     /// False for walks from a directional or environment light: their first
     /// segment has no length.
     pub finite_start: bool,
+    /// What Russian roulette multiplies the throughput by before it reads it
+    /// as a survival probability: one over the starting throughput's largest
+    /// channel, so a walk is judged by how much of its start it still
+    /// carries. A light walk starts at emitted power over density, often in
+    /// the hundreds; read raw, it would survive every bounce until that had
+    /// decayed below one, and tracing twice as many segments per path as a
+    /// camera walk buys little.
+    pub roulette_scale: f32,
 }
 
 /// A non-delta vertex of a light subpath, kept for connections.
@@ -139,13 +147,25 @@ impl Walk {
         );
         self.dir = s.wi;
         if self.length >= ROULETTE_START {
-            let survive = self.throughput.max_element().min(1.0);
+            let survive = (self.throughput.max_element() * self.roulette_scale).min(1.0);
             if sampler.next_1d() >= survive {
                 return false;
             }
             self.throughput /= survive;
         }
         true
+    }
+}
+
+/// One over `start`'s largest channel: a walk starting there begins
+/// roulette with a survival probability of one. One where that is not a
+/// positive finite number (a black start ends at its first vertex anyway).
+pub fn roulette_scale(start: Rgb) -> f32 {
+    let largest = start.max_element();
+    if largest > 0.0 && (1.0 / largest).is_finite() {
+        1.0 / largest
+    } else {
+        1.0
     }
 }
 
@@ -187,10 +207,12 @@ pub fn start_light_walk(
     } else {
         mis(cos_used / emission_pdf)
     };
+    let throughput = e.value / emission_pdf;
     let walk = Walk {
         origin,
         dir: e.dir,
-        throughput: e.value / emission_pdf,
+        throughput,
+        roulette_scale: roulette_scale(throughput),
         length: 1,
         d_vcm: mis(direct_pdf / emission_pdf),
         d_vc,
@@ -204,4 +226,19 @@ pub fn start_light_walk(
         emission: e,
         pick,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn roulette_scale_brings_the_largest_channel_to_one() {
+        let start = Rgb::new(250.0, 120.0, 40.0);
+        assert_eq!(start.max_element() * roulette_scale(start), 1.0);
+        assert_eq!(roulette_scale(Rgb::new(0.5, 0.25, 0.0)), 2.0);
+        // No finite positive maximum: roulette reads the throughput raw.
+        assert_eq!(roulette_scale(Rgb::ZERO), 1.0);
+        assert_eq!(roulette_scale(Rgb::new(1e-45, 0.0, 0.0)), 1.0);
+    }
 }
