@@ -81,22 +81,24 @@ pub(super) fn safe_inverse(c: f32) -> f32 {
     }
 }
 
-/// The ray, splatted across lanes, with what every test reuses.
+/// The ray, splatted across lanes, with what every test reuses. Every
+/// field is read at a fixed position (the per-ray axis choices index the
+/// node and the block, never this struct), so the compiler can keep it in
+/// registers rather than on the stack.
 pub(super) struct RayLanes {
     origin: [f32x8; 3],
     inv_dir: [f32x8; 3],
-    origin4: [f32x4; 3],
     /// Per axis, which row of `WideNode::bounds` holds the near plane (the
     /// minimum for a positive direction, the maximum for a negative one).
     near_row: [usize; 3],
-    tmin: f32x4,
-    /// The watertight test's shear: the dominant axis `kz`, the other two,
-    /// and the shear constants (see `RayShear`).
+    tmin: f32,
+    /// The watertight test's axes: `kx`, `ky`, then the dominant `kz`
+    /// (see `RayShear`).
     k: [usize; 3],
+    /// The origin's coordinates along `kx`, `ky` and `kz`.
+    origin_k: [f32x4; 3],
+    /// The shear constants `sx`, `sy`, `sz`.
     shear: [f32x4; 3],
-    scalar_origin: [f32; 3],
-    scalar_inv: [f32; 3],
-    scalar_tmin: f32,
 }
 
 impl RayLanes {
@@ -108,14 +110,11 @@ impl RayLanes {
         RayLanes {
             origin: o.map(f32x8::splat),
             inv_dir: inv.map(f32x8::splat),
-            origin4: o.map(f32x4::splat),
             near_row: [0, 1, 2].map(|a| if inv[a] >= 0.0 { a } else { a + 3 }),
-            tmin: f32x4::splat(ray.tmin),
+            tmin: ray.tmin,
             k,
+            origin_k: k.map(|axis| f32x4::splat(o[axis])),
             shear: s.map(f32x4::splat),
-            scalar_origin: o,
-            scalar_inv: inv,
-            scalar_tmin: ray.tmin,
         }
     }
 
@@ -123,10 +122,11 @@ impl RayLanes {
     /// box, which no node holds, tested once per packet ray.
     pub(super) fn enters(&self, bounds: &Aabb, tmax: f32) -> bool {
         let (lo, hi) = (bounds.min.to_array(), bounds.max.to_array());
-        let (mut near, mut far) = (self.scalar_tmin, tmax);
+        let (mut near, mut far) = (self.tmin, tmax);
         for a in 0..3 {
-            let t0 = (lo[a] - self.scalar_origin[a]) * self.scalar_inv[a];
-            let t1 = (hi[a] - self.scalar_origin[a]) * self.scalar_inv[a];
+            let (origin, inv) = (self.origin[a].as_array()[0], self.inv_dir[a].as_array()[0]);
+            let t0 = (lo[a] - origin) * inv;
+            let t1 = (hi[a] - origin) * inv;
             near = near.max(t0.min(t1));
             far = far.min(t0.max(t1));
         }
@@ -137,7 +137,7 @@ impl RayLanes {
     /// the ray enters before `tmax`.
     #[inline(always)]
     fn enter(&self, node: &WideNode, tmax: f32) -> (f32x8, u32) {
-        let mut near = f32x8::splat(self.scalar_tmin);
+        let mut near = f32x8::splat(self.tmin);
         let mut far = f32x8::splat(tmax);
         for axis in 0..3 {
             let near_plane = f32x8::new(node.bounds[self.near_row[axis]]);
@@ -162,10 +162,11 @@ impl RayLanes {
         let [kx, ky, kz] = self.k;
         let [sx, sy, sz] = self.shear;
         // Vertex positions relative to the origin, sheared so the ray runs along +z.
+        let [ox, oy, oz] = self.origin_k;
         let project = |v: &[[f32; 4]; 3]| {
-            let x = f32x4::new(v[kx]) - self.origin4[kx];
-            let y = f32x4::new(v[ky]) - self.origin4[ky];
-            let z = f32x4::new(v[kz]) - self.origin4[kz];
+            let x = f32x4::new(v[kx]) - ox;
+            let y = f32x4::new(v[ky]) - oy;
+            let z = f32x4::new(v[kz]) - oz;
             (x - sx * z, y - sy * z, z)
         };
         let (ax, ay, az) = project(&block.v[0]);
@@ -208,8 +209,10 @@ impl RayLanes {
         let inv_det = f32x4::ONE / det;
         let t = t_scaled * inv_det;
         // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
-        let hit =
-            !outside & det.simd_ne(zero) & t.simd_gt(self.tmin) & t.simd_lt(f32x4::splat(tmax));
+        let hit = !outside
+            & det.simd_ne(zero)
+            & t.simd_gt(f32x4::splat(self.tmin))
+            & t.simd_lt(f32x4::splat(tmax));
         (
             hit.to_bitmask() & lanes,
             t.to_array(),
