@@ -159,11 +159,13 @@ impl Walk {
 
 /// One over `start`'s largest channel: a walk starting there begins
 /// roulette with a survival probability of one. One where that is not a
-/// positive finite number (a black start ends at its first vertex anyway).
+/// positive finite number: a black start ends at its first vertex anyway,
+/// and an infinite one (a sample about to be discarded) must not turn the
+/// survival probability into 0 × ∞ = NaN, which no roulette draw rejects.
 pub fn roulette_scale(start: Rgb) -> f32 {
-    let largest = start.max_element();
-    if largest > 0.0 && (1.0 / largest).is_finite() {
-        1.0 / largest
+    let scale = 1.0 / start.max_element();
+    if scale.is_finite() && scale > 0.0 {
+        scale
     } else {
         1.0
     }
@@ -240,5 +242,7 @@ mod tests {
         // No finite positive maximum: roulette reads the throughput raw.
         assert_eq!(roulette_scale(Rgb::ZERO), 1.0);
         assert_eq!(roulette_scale(Rgb::new(1e-45, 0.0, 0.0)), 1.0);
+        assert_eq!(roulette_scale(Rgb::new(f32::INFINITY, 1.0, 1.0)), 1.0);
+        assert_eq!(roulette_scale(Rgb::new(f32::NAN, 1.0, 1.0)), 1.0);
     }
 }
