@@ -7,12 +7,15 @@
 //! reads memory front to back. One pass bins all three axes; the winning
 //! split's bin sweep already gives both children's bounds; and the partition
 //! pass computes both children's centroid bounds. Big subtrees are built in
-//! parallel with `rayon::join`.
+//! parallel with `rayon::join`, each into its own array, and `assemble`
+//! copies them into the final one in a single parallel pass.
 
+mod assemble;
 mod spatial;
 
 use super::{Bvh, Node, INTERSECTION_COST, TRAVERSAL_COST};
 use crate::geometry::{Aabb, Triangle};
+use assemble::{assemble, Part};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use wide::f32x4;
@@ -257,19 +260,41 @@ pub(super) fn build_tree(triangles: &[Triangle], options: &BuildOptions) -> (Vec
     let nodes = if prims.is_empty() {
         Vec::new()
     } else {
-        let range = measure(&prims);
-        build_subtree(&options, &mut prims, range, 0, 0)
+        let range = measure(&prims, options.parallel);
+        assemble(
+            build_subtree(&options, &mut prims, range, 0, 0),
+            options.parallel,
+        )
     };
-    (nodes, prims.iter().map(Prim::index).collect())
+    let order = if options.parallel {
+        prims.par_iter().map(Prim::index).collect()
+    } else {
+        prims.iter().map(Prim::index).collect()
+    };
+    (nodes, order)
 }
 
-fn measure(prims: &[Prim]) -> Range {
-    let mut bounds = Box4::EMPTY;
-    let mut centroids = Aabb::EMPTY;
-    for p in prims {
-        bounds.grow(p);
-        centroids = centroids.grow(p.centroid2());
-    }
+/// The bounds and centroid bounds of `prims`, in chunks on the rayon pool
+/// when `parallel` and there are many (minima and maxima are exact, so the
+/// chunking changes nothing).
+fn measure(prims: &[Prim], parallel: bool) -> Range {
+    let one = |prims: &[Prim]| {
+        let mut bounds = Box4::EMPTY;
+        let mut centroids = Aabb::EMPTY;
+        for p in prims {
+            bounds.grow(p);
+            centroids = centroids.grow(p.centroid2());
+        }
+        (bounds, centroids)
+    };
+    let (bounds, centroids) = if parallel && prims.len() >= 4 * PARALLEL_MIN {
+        prims.par_chunks(PARALLEL_MIN).map(one).reduce(
+            || (Box4::EMPTY, Aabb::EMPTY),
+            |a, b| (a.0.union(b.0), a.1.union(b.1)),
+        )
+    } else {
+        one(prims)
+    };
     Range {
         bounds: bounds.aabb(),
         centroids,
@@ -460,34 +485,43 @@ fn median_split(prims: &mut [Prim], range: Range) -> (usize, Range, Range) {
             .then(a.index().cmp(&b.index()))
     });
     let (l, r) = prims.split_at(mid);
-    (mid, measure(l), measure(r))
+    (mid, measure(l, false), measure(r, false))
 }
 
 /// Builds the subtree over `prims`, whose first entry is triangle `offset`
-/// in leaf order. Returns its nodes with the root first and siblings adjacent.
+/// in leaf order: ranges of at least `PARALLEL_MIN` are split here (their
+/// halves built in parallel when `options.parallel`), smaller ones built
+/// whole by `build_sequential`. The parts are the same either way.
 fn build_subtree(
     options: &BuildOptions,
     prims: &mut [Prim],
     range: Range,
     offset: usize,
     depth: usize,
-) -> Vec<Node> {
-    if !options.parallel || prims.len() < PARALLEL_MIN {
-        return build_sequential(options, prims, range, offset, depth);
+) -> Part {
+    if prims.len() < PARALLEL_MIN {
+        return Part::Whole(build_sequential(options, prims, range, offset, depth));
     }
     let Some((mid, left_range, right_range)) = split(options, prims, range, depth) else {
-        return vec![Node {
+        return Part::Whole(vec![Node {
             bounds: range.bounds,
             first: offset as u32,
             count: prims.len() as u32,
-        }];
+        }]);
     };
     let (left_prims, right_prims) = prims.split_at_mut(mid);
-    let (left, right) = rayon::join(
-        || build_subtree(options, left_prims, left_range, offset, depth + 1),
-        || build_subtree(options, right_prims, right_range, offset + mid, depth + 1),
-    );
-    join_subtrees(range.bounds, &left, &right, 0)
+    let mut left = move || build_subtree(options, left_prims, left_range, offset, depth + 1);
+    let mut right =
+        move || build_subtree(options, right_prims, right_range, offset + mid, depth + 1);
+    let children = if options.parallel {
+        rayon::join(left, right)
+    } else {
+        (left(), right())
+    };
+    Part::Split {
+        bounds: range.bounds,
+        children: Box::new([children.0, children.1]),
+    }
 }
 
 /// The nodes of a subtree with root box `bounds` whose two children were

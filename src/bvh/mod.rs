@@ -86,7 +86,7 @@ impl Bvh {
 
     /// Expected cost of a random ray under the SAH, in units of one triangle test.
     pub fn sah_cost(&self) -> f32 {
-        sah_cost(&self.nodes)
+        sah_cost(&self.nodes, false)
     }
 
     /// Number of leaves.
@@ -103,7 +103,7 @@ impl Bvh {
 
 /// Expected cost of a random ray through a binary tree under the SAH, in
 /// units of one triangle test.
-pub(crate) fn sah_cost(nodes: &[Node]) -> f32 {
+pub(crate) fn sah_cost(nodes: &[Node], parallel: bool) -> f32 {
     let Some(root) = nodes.first() else {
         return 0.0;
     };
@@ -111,16 +111,33 @@ pub(crate) fn sah_cost(nodes: &[Node]) -> f32 {
     if root_area <= 0.0 {
         return 0.0;
     }
-    let total: f32 = nodes
-        .iter()
-        .map(|n| {
-            let cost = if n.is_leaf() {
-                n.count as f32 * INTERSECTION_COST
-            } else {
-                TRAVERSAL_COST
-            };
-            n.bounds.surface_area() * cost
-        })
-        .sum();
-    total / root_area
+    let total = chunked_sum(nodes, parallel, |n| {
+        let cost = if n.is_leaf() {
+            n.count as f32 * INTERSECTION_COST
+        } else {
+            TRAVERSAL_COST
+        };
+        (n.bounds.surface_area() * cost) as f64
+    });
+    (total / root_area as f64) as f32
+}
+
+/// The sum of `term` over `items`, added up in fixed chunks (on the rayon
+/// pool when `parallel`) and the chunks' sums in order, so the result is the
+/// same bits whatever the thread count. For build reports over the whole
+/// tree, which a single thread took several milliseconds to add up.
+pub(crate) fn chunked_sum<T: Sync>(
+    items: &[T],
+    parallel: bool,
+    term: impl Fn(&T) -> f64 + Sync,
+) -> f64 {
+    const CHUNK: usize = 8192;
+    let chunk_sum = |chunk: &[T]| chunk.iter().map(&term).sum::<f64>();
+    let sums: Vec<f64> = if parallel {
+        use rayon::prelude::*;
+        items.par_chunks(CHUNK).map(chunk_sum).collect()
+    } else {
+        items.chunks(CHUNK).map(chunk_sum).collect()
+    };
+    sums.iter().sum()
 }

@@ -96,7 +96,7 @@ pub(super) fn build_tree(
 ) -> (Vec<Node>, Vec<u32>) {
     let fraction = options.spatial_split_budget.clamp(0.0, 16.0) as f64;
     let budget = (prims.len() as f64 * fraction) as usize;
-    let range = measure(&prims);
+    let range = measure(&prims, false);
     let builder = Builder {
         triangles,
         options,
@@ -443,7 +443,7 @@ impl Builder<'_> {
         if left.is_empty() || right.is_empty() {
             return None;
         }
-        let (left_range, right_range) = (measure(&left), measure(&right));
+        let (left_range, right_range) = (measure(&left, false), measure(&right, false));
         let (left_budget, right_budget) =
             share(budget.saturating_sub(added), left.len(), right.len());
         Some(Outcome::Split(
