@@ -21,6 +21,7 @@ pub mod files;
 pub mod film;
 pub mod format;
 pub mod geometry;
+pub mod huge_pages;
 pub mod integrator;
 pub mod light;
 pub mod material;

@@ -4,6 +4,11 @@ mod cli;
 
 use clap::Parser;
 
+/// Large blocks on huge pages: faster BVH traversal and builds on big meshes
+/// (see `tracer::huge_pages`).
+#[global_allocator]
+static ALLOCATOR: tracer::huge_pages::HugePageAlloc = tracer::huge_pages::HugePageAlloc;
+
 fn main() {
     let cli = cli::Cli::parse();
     match cli::run(cli) {
