@@ -15,7 +15,8 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 
 /// Allocations of at least this many bytes get their own huge-page mapping:
-/// rounding up to whole 2 MiB pages then wastes at most a fifth.
+/// rounding up to whole 2 MiB pages then leaves at most a fifth of the
+/// mapping unused.
 const LARGE: usize = 8 << 20;
 const HUGE_PAGE: usize = 2 << 20;
 
