@@ -220,15 +220,18 @@ fn spatial_splits_change_the_tree_not_the_hits() {
             })
             .collect()
     };
-    // Hit counts agree exactly. A ray through the shared edge of two
-    // triangles may be answered by either, at distances an ulp apart, and
-    // which one depends on the boxes (a split reference's box is clipped),
-    // so the distance sums agree to rounding, not to the bit.
+    // Hit counts agree exactly; the distance sums agree to rounding, not
+    // to the bit: with a different tree a few rays are answered by a
+    // triangle a few ulps farther (the slab test's rounding near a box
+    // face, which the exit stretch does not always cover).
     let (plain, split) = (answers(&plain), answers(&split));
     assert_eq!(plain.len(), split.len());
     for (p, s) in plain.iter().zip(&split) {
         assert_eq!((&p.0, p.1), (&s.0, s.1));
-        assert!((p.2 - s.2).abs() <= 1e-9 * p.2.abs().max(1.0), "{p:?} vs {s:?}");
+        assert!(
+            (p.2 - s.2).abs() <= 1e-9 * p.2.abs().max(1.0),
+            "{p:?} vs {s:?}"
+        );
     }
 
     let out = tracer()
