@@ -51,6 +51,12 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
     let mut previous_delta = true;
     let mut previous_position = ray.origin;
     let mut segments = 0;
+    // The product of eta² over the refractions so far. Radiance entering a
+    // denser medium is scaled by 1/eta² and regains it on leaving; roulette
+    // reads the throughput with that factor undone, or it would end most
+    // paths inside glass just for being inside, and the caustics they carry
+    // would come from a few heavily weighted survivors.
+    let mut eta_squared = 1.0f32;
 
     loop {
         sampler.start_vertex();
@@ -95,6 +101,7 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
             break;
         };
         throughput *= s.weight;
+        eta_squared *= s.eta * s.eta;
         previous_pdf = s.pdf;
         previous_delta = s.delta;
         previous_position = surface.position;
@@ -109,7 +116,7 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         );
 
         if segments >= ROULETTE_START {
-            let survive = throughput.max_element().min(1.0);
+            let survive = (throughput.max_element() * eta_squared).min(1.0);
             if sampler.next_1d() >= survive {
                 break;
             }

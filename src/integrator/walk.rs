@@ -46,7 +46,8 @@ pub struct Walk {
     /// carries. A light walk starts at emitted power over density, often in
     /// the hundreds; read raw, it would survive every bounce until that had
     /// decayed below one, and tracing twice as many segments per path as a
-    /// camera walk buys little.
+    /// camera walk buys little. A camera walk also multiplies in eta² at
+    /// each refraction, undoing the 1/eta² its radiance throughput takes.
     pub roulette_scale: f32,
 }
 
@@ -139,6 +140,11 @@ impl Walk {
             self.d_vcm = mis(1.0 / s.pdf);
         }
         self.throughput *= s.weight;
+        if mode == Transport::Radiance {
+            // Undo the 1/eta² radiance takes on entering glass, as the path
+            // tracer does (see `pt::radiance`); importance does not take it.
+            self.roulette_scale *= s.eta * s.eta;
+        }
         self.origin = offset_origin(
             surface.position,
             surface.geometric_normal,

@@ -178,6 +178,10 @@ pub struct BsdfSample {
     /// Whether `wi` came from a delta lobe (mirror reflection or smooth
     /// refraction): no other strategy can produce it, and `pdf` is a probability.
     pub delta: bool,
+    /// The relative index crossed: the far side's over `wo`'s side for a
+    /// refraction, one for a reflection. A radiance weight through such a
+    /// crossing carries 1/eta²; Russian roulette multiplies it back out.
+    pub eta: f32,
 }
 
 impl Material {
@@ -424,11 +428,17 @@ impl Bsdf {
             Transport::Radiance => weight,
             Transport::Importance => weight * self.shading_correction(wo, wi),
         };
+        let eta = match self.kind {
+            BsdfKind::Dielectric { eta, .. } if !reflected => eta,
+            BsdfKind::RoughDielectric(ref r) if !reflected => r.eta,
+            _ => 1.0,
+        };
         Some(BsdfSample {
             wi,
             weight,
             pdf,
             delta,
+            eta,
         })
     }
 }

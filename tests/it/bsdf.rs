@@ -152,11 +152,14 @@ fn dielectric_chooses_lobes_by_fresnel() {
                 reflected += 1;
                 assert!(s.wi.abs_diff_eq(Vec3::new(-wo.x, -wo.y, wo.z), 1e-5));
                 assert_eq!(s.weight, Rgb::ONE);
+                assert_eq!(s.eta, 1.0);
             } else {
                 // Snell: sin θt = sin θi / η.
                 let (si, st) = ((1.0 - wo.z * wo.z).sqrt(), (1.0 - s.wi.z * s.wi.z).sqrt());
                 assert!((si - eta * st).abs() < 1e-4);
                 assert!((s.weight.x - 1.0 / (eta * eta)).abs() < 1e-5);
+                // The index crossed, which roulette uses to undo the 1/eta².
+                assert!((s.eta - eta).abs() < 1e-6, "eta {} vs {eta}", s.eta);
                 let imp = bsdf
                     .sample(wo, (0.5, 0.5), 0.999_999, Transport::Importance)
                     .unwrap();
@@ -169,6 +172,32 @@ fn dielectric_chooses_lobes_by_fresnel() {
             (p - f).abs() <= 5.0 * sigma + 1e-9,
             "reflected {p}, Fresnel {f}"
         );
+    }
+}
+
+#[test]
+fn rough_glass_reports_the_index_it_crosses() {
+    let mut rng = Rng::new(4);
+    for (wo, eta) in [
+        (Vec3::new(0.3, 0.1, 0.95).normalize(), 1.5),
+        (Vec3::new(0.1, -0.2, -0.97).normalize(), 1.0 / 1.5),
+    ] {
+        let bsdf = rough_glass(0.3).bsdf(&surface(Vec3::Z, Vec3::Z), wo);
+        let (mut reflections, mut refractions) = (0, 0);
+        for _ in 0..10_000 {
+            let u = (rng.f32(), rng.f32());
+            let Some(s) = bsdf.sample(wo, u, rng.f32(), Transport::Radiance) else {
+                continue;
+            };
+            if s.wi.z * wo.z > 0.0 {
+                reflections += 1;
+                assert_eq!(s.eta, 1.0);
+            } else {
+                refractions += 1;
+                assert!((s.eta - eta).abs() < 1e-6, "eta {} vs {eta}", s.eta);
+            }
+        }
+        assert!(reflections > 0 && refractions > 0);
     }
 }
 
