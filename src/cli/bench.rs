@@ -55,9 +55,9 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
     if args.json {
         let json = serde_json::to_string_pretty(&report)
             .map_err(|e| Error::io("(standard output)", std::io::Error::other(e)))?;
-        println!("{json}");
+        outln!("{json}");
     } else {
-        print!("{}", report.table());
+        out!("{}", report.table());
     }
     Ok(())
 }

@@ -52,14 +52,14 @@ pub fn run_cache(action: &CacheCommand, dir: Option<PathBuf>) -> Result<()> {
     match action {
         CacheCommand::List => {
             let entries = cache.list().map_err(io)?;
-            println!("{:<16}  {:>10}  {:>10}  scene", "key", "size", "last used");
+            outln!("{:<16}  {:>10}  {:>10}  scene", "key", "size", "last used");
             for e in &entries {
                 let age = e.last_used.elapsed().unwrap_or_default();
                 let scene = match &e.scene {
                     Ok(s) => s.clone(),
                     Err(why) => format!("(invalid: {why})"),
                 };
-                println!(
+                outln!(
                     "{:<16}  {:>10}  {:>10}  {scene}",
                     &e.key[..e.key.len().min(16)],
                     human_bytes(e.bytes),
@@ -67,7 +67,7 @@ pub fn run_cache(action: &CacheCommand, dir: Option<PathBuf>) -> Result<()> {
                 );
             }
             let total: u64 = entries.iter().map(|e| e.bytes).sum();
-            println!(
+            outln!(
                 "{} entries, {} in {}",
                 entries.len(),
                 human_bytes(total),
@@ -76,11 +76,11 @@ pub fn run_cache(action: &CacheCommand, dir: Option<PathBuf>) -> Result<()> {
         }
         CacheCommand::Clear => {
             let (n, bytes) = cache.clear().map_err(io)?;
-            println!("removed {n} files ({})", human_bytes(bytes));
+            outln!("removed {n} files ({})", human_bytes(bytes));
         }
         CacheCommand::Prune { max_size } => {
             let (n, bytes) = cache.prune(*max_size).map_err(io)?;
-            println!(
+            outln!(
                 "removed {n} entries ({}), least recently used first",
                 human_bytes(bytes)
             );

@@ -13,15 +13,15 @@ pub fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
     let desc = read_scene(path)?;
     let scene = build(&desc, cache.cache().as_ref())?;
     let count = |f: fn(&Light) -> bool| scene.lights.iter().filter(|l| f(l)).count();
-    println!("scene:      {} ({})", scene.name, path.display());
-    println!("triangles:  {}", scene.triangles.len());
+    outln!("scene:      {} ({})", scene.name, path.display());
+    outln!("triangles:  {}", scene.triangles.len());
     if scene.report.degenerate_triangles_dropped > 0 {
-        println!(
+        outln!(
             "dropped:    {} degenerate triangles",
             scene.report.degenerate_triangles_dropped
         );
     }
-    println!(
+    outln!(
         "lights:     {} (area triangles {}, point {}, spot {}, directional {}, environment {})",
         scene.lights.len(),
         count(|l| matches!(l, Light::Area(_))),
@@ -30,22 +30,27 @@ pub fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
         count(|l| matches!(l, Light::Directional(_))),
         count(|l| matches!(l, Light::Environment(_))),
     );
-    println!(
+    outln!(
         "materials:  {} ({})",
         scene.materials.len(),
         scene.material_names.join(", ")
     );
     let b = scene.bounds;
     if b.is_empty() {
-        println!("bounds:     empty");
+        outln!("bounds:     empty");
     } else {
-        println!(
+        outln!(
             "bounds:     ({:.4}, {:.4}, {:.4}) .. ({:.4}, {:.4}, {:.4})",
-            b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+            b.min.x,
+            b.min.y,
+            b.min.z,
+            b.max.x,
+            b.max.y,
+            b.max.z
         );
     }
     let r = scene.bvh.report();
-    println!(
+    outln!(
         "bvh:        {}-wide, {} nodes, {} leaves, SAH cost {:.2} (binary {:.2}), {} bytes, {}",
         tracer::bvh::wide::WIDTH,
         r.nodes,
@@ -59,7 +64,7 @@ pub fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
         }
     );
     let s = &desc.settings;
-    println!(
+    outln!(
         "render:     {}x{}, {} spp, {}, max depth {}, seed {} -> {}",
         s.film.width,
         s.film.height,
@@ -70,7 +75,7 @@ pub fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
         s.film.output.display()
     );
     for w in &scene.report.warnings {
-        println!("warning:    {w}");
+        outln!("warning:    {w}");
     }
     Ok(())
 }

@@ -1,6 +1,24 @@
 //! The command line: `tracer render`, `info`, `bench`, `compare`, `cache`
 //! and `merge`.
 
+/// `println!` for a command's output on stdout. A reader that goes away
+/// early (`tracer bench --json | head`) makes the write fail with a broken
+/// pipe; the command then exits at once with the status a shell gives a
+/// process killed by SIGPIPE (141), quietly, as other Unix tools do,
+/// instead of panicking.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::cli::write_out(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// `print!` for a command's output, as [`outln!`].
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::cli::write_out(format_args!($($arg)*))
+    };
+}
+
 mod bench;
 mod cache;
 mod info;
@@ -77,7 +95,7 @@ pub fn run(cli: Cli) -> Result<i32> {
                     a.width, a.height, b.width, b.height
                 ),
             })?;
-            println!("{error:.6e}");
+            outln!("{error:.6e}");
             Ok(0)
         }
     }
@@ -96,3 +114,19 @@ fn one_of<T: Copy + Send + Sync + 'static>(
             .ok_or_else(|| format!("unknown value {s:?}"))
     })
 }
+
+/// Writes a command's output to stdout; see [`outln!`].
+pub(crate) fn write_out(text: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if let Err(e) = stdout.write_fmt(text).and_then(|()| stdout.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(BROKEN_PIPE_EXIT);
+        }
+        eprintln!("error: writing to stdout: {e}");
+        std::process::exit(1);
+    }
+}
+
+/// 128 + SIGPIPE: what a shell reports for a process a closed pipe ended.
+const BROKEN_PIPE_EXIT: i32 = 141;

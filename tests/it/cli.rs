@@ -106,6 +106,27 @@ fn bad_flags_are_refused_without_a_panic() {
     }
 }
 
+/// A reader that closes the pipe before `tracer` writes (`tracer bench
+/// --json | head`) ends it with the status of a process killed by SIGPIPE,
+/// without a panic's message.
+#[test]
+fn a_closed_stdout_pipe_ends_quietly() {
+    use std::process::Stdio;
+    let mut child = tracer()
+        .args(["bench", "scenes/cornell-box.json", "--rays", "primary"])
+        .args(["--runs", "1", "--threads", "1", "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The bench builds and traces before it prints: the pipe is closed by then.
+    drop(child.stdout.take());
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(output.status.code(), Some(141), "{stderr}");
+}
+
 /// Settings given as flags pass the same checks as a scene's, before any
 /// geometry is built, and the message names the flag.
 #[test]
