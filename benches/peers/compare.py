@@ -579,7 +579,8 @@ def run_scene(scene, args, tracer, mits, images):
             control["seconds"] = secs
             agree["control"] = control
     return {"scene": scene, "size": list(size), "max_depth": max_depth, "reference": ref_info,
-            "spp": args.spp, "fixed": fixed, "equal_time_budget_s": budget, "equal_time": equal,
+            "spp": args.spp, "fixed": fixed, "equal_time_budget_s": budget,
+            "equal_time_given": bool(args.equal_time), "equal_time": equal,
             "agreement": agree}
 
 
@@ -640,8 +641,10 @@ def markdown(meta, results):
                   f"Fixed spp ({res['spp']} requested):", "",
                   TABLE_HEAD] + [fmt_row(r) for r in res["fixed"]] + [""]
         if res["equal_time"]:
-            lines += [f"Equal time ({res['equal_time_budget_s']:.2f} s: tracer `pt`'s time at the "
-                      f"fixed spp; `N (k x n)`: k independent passes of n spp, averaged, for "
+            source = ("--equal-time" if res.get("equal_time_given")
+                      else "tracer `pt`'s time at the fixed spp")
+            lines += [f"Equal time ({res['equal_time_budget_s']:.2f} s: {source}; "
+                      f"`N (k x n)`: k independent passes of n spp, averaged, for "
                       f"samplers that take only some counts):", "", TABLE_HEAD] + [fmt_row(r) for r in res["equal_time"]] + [""]
         best = best_samplers(res)
         if best:
