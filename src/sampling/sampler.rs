@@ -158,4 +158,35 @@ mod tests {
             );
         }
     }
+
+    /// The sampler's numbers are group `g`'s `sample_4d` for the g-th group
+    /// it opens, whatever mix of 1D, 2D and vertex starts asks for them.
+    #[test]
+    fn draws_follow_one_group_after_another() {
+        let tables = sobol_tables();
+        for (pixel, index) in [
+            (PixelSeed::new(7, 3, 4), 0u64),
+            (PixelSeed::new(1, 0, 9), 70_000),
+        ] {
+            let mut sampler = Sampler::for_pixel(pixel, index);
+            let block = (index / SEQUENCE_LENGTH as u64) as u32;
+            let seed = hash_combine(pixel.0, block);
+            let i = (index % SEQUENCE_LENGTH as u64) as u32;
+            let group = |g: u32| sample_4d(tables, i, hash_combine(seed, g));
+            // A pinhole camera sample, then vertices of light, BSDF and
+            // roulette draws, as the path tracer makes them.
+            let (x, y) = sampler.next_2d();
+            assert_eq!([x, y], group(0)[..2]);
+            for vertex in 0..5u32 {
+                sampler.start_vertex();
+                let (g_light, g_bsdf) = (1 + 2 * vertex, 2 + 2 * vertex);
+                let select = sampler.next_1d();
+                let (u, v) = sampler.next_2d();
+                assert_eq!([select, u, v], group(g_light)[..3], "vertex {vertex}");
+                let (a, b) = sampler.next_2d();
+                let (lobe, roulette) = (sampler.next_1d(), sampler.next_1d());
+                assert_eq!([a, b, lobe, roulette], group(g_bsdf), "vertex {vertex}");
+            }
+        }
+    }
 }
