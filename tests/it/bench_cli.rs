@@ -225,11 +225,11 @@ fn spatial_splits_change_the_tree_not_the_hits() {
     // triangle's own answer) found 5 of the 1M incoherent rays answered
     // differently, all where the cube's bottom face lies on the floor: two
     // coplanar triangles, whose watertight tests put the same point at
-    // distances 25 ulps apart (the floor's large triangles round more).
-    // The plain tree reaches the cube first and then culls the floor's
-    // box, whose exact entry distance lies past the cube's rounded hit;
-    // the split tree visits the floor first. Both answers are the same
-    // point to the triangle test's own precision.
+    // distances about 25 ulps apart (on the ray checked, the floor's 25
+    // ulps short of the exact plane distance, the cube's 6). The plain
+    // tree reports the cube, the floor's box then starting past the cube's
+    // rounded hit; the split tree reports the floor. Both answers are the
+    // same point to the triangle test's own precision.
     let (plain, split) = (answers(&plain), answers(&split));
     assert_eq!(plain.len(), split.len());
     for (p, s) in plain.iter().zip(&split) {
