@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Peer comparison: tracer against Mitsuba 3 on the bundled Cornell scenes.
 
-For each scene (default: scenes/cornell-box.json and
-scenes/cornell-caustics.json, at 256 x 256, 2 threads):
+For each scene (default: scenes/cornell-box.json,
+scenes/cornell-caustics.json and, when ../shared/meshes/dragon.obj is
+there, benches/scenes/dragon.json; at 256 x 256, 2 threads):
 
 1. A reference: tracer's `bdpt` at --reference-spp, rendered as
    --reference-parts processes with disjoint `--sample-offset`s (the parts
@@ -74,6 +75,10 @@ sys.path.insert(0, HERE)
 import to_mitsuba  # noqa: E402  (needs no Mitsuba until convert() is called)
 
 DEFAULT_SCENES = ["scenes/cornell-box.json", "scenes/cornell-caustics.json"]
+# The Stanford dragon on a floor under a small light, when ../shared/meshes
+# has the mesh: a scene where the BVH, not the shading, takes most of the time.
+if os.path.exists(os.path.join(REPO, "..", "shared", "meshes", "dragon.obj")):
+    DEFAULT_SCENES.append("benches/scenes/dragon.json")
 MI_INTEGRATORS = ["path", "ptracer"]
 MI_SAMPLERS = ["independent", "multijitter", "ldsampler", "orthogonal"]
 TRACER_INTEGRATORS = ["pt", "lt", "bdpt"]
@@ -671,13 +676,16 @@ def readme_table(meta, results):
              f"{meta['drjit']}) in the same run: {meta['threads']} threads, "
              f"{meta['date'][:10]}, {m['cpu']} ({m['cores']} cores), tracer at git {meta['git']}, "
              f"`{meta['command']}`. Efficiency is 1 / (relative MSE x seconds) at equal samples "
-             f"per pixel, against Mitsuba's most efficient sampler for the scene.", "",
+             f"per pixel, against Mitsuba's most efficient sampler for the scene. Mitsuba has "
+             f"no bidirectional path tracer: tracer's `bdpt` is set against its `path`.", "",
              "| scene | tracer M samples/s | Mitsuba M samples/s | tracer / Mitsuba | "
              "efficiency, tracer / Mitsuba (its sampler) |",
              "|---|---|---|---:|---:|"]
     for res in results:
         scene = f"{os.path.splitext(os.path.basename(res['scene']))[0]} {res['size'][0]} x {res['size'][1]}, {res['spp']} spp"
-        for ours, theirs in (("pt", "path"), ("lt", "ptracer")):
+        # Mitsuba has no BDPT: tracer's bdpt is set against its path tracer,
+        # which estimates the same image.
+        for ours, theirs in (("pt", "path"), ("lt", "ptracer"), ("bdpt", "path")):
             mine = [r for r in res["fixed"] if r["renderer"] == "tracer" and r["integrator"] == ours]
             peers = [r for r in res["fixed"] if r["renderer"] == "mitsuba" and r["integrator"] == theirs]
             if not mine or not peers:

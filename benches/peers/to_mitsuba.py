@@ -38,7 +38,8 @@ Conversions (tracer -> Mitsuba 3):
   ggx`, `alpha`, `int_ior` = ior, `ext_ior` 1, `diffuse_reflectance` =
   albedo, `nonlinear` false; `alpha` 0 -> `twosided(plastic)`.
 - objects `triangles`, `quad`, `cube`, `sphere` (tracer's icosphere, vertex
-  for vertex) with their `transform` -> `mi.Mesh`; zero-area triangles are
+  for vertex) and `mesh` (an OBJ file read as tracer reads it, see
+  `read_obj`) with their `transform` -> `mi.Mesh`; zero-area triangles are
   dropped as tracer drops them; vertex normals are carried by the inverse
   transpose and, as in tracer, ignored on a triangle where one is zero, and
   turned to the side of the geometric normal.
@@ -53,7 +54,8 @@ Conversions (tracer -> Mitsuba 3):
 - `render.max_depth` -> `max_depth`: both count path segments (1: emitters
   seen directly, 2: direct lighting).
 
-Refused: `mesh` (OBJ) objects, textures, `two_sided` emitters (Mitsuba 3's
+Refused: `mesh` objects whose OBJ file uses MTL materials and that name no
+`material` of their own, textures, `two_sided` emitters (Mitsuba 3's
 area light is one-sided), emitters with vertex normals (Mitsuba emits on the
 side of the interpolated normal, tracer of the geometric one), `spot` lights
 (different falloff curves), `.trs` files, format versions other than 1 and 2,
@@ -353,13 +355,75 @@ def make_mesh(name, p, n, f, bsdf, emission):
     return mesh
 
 
-def _object_shapes(obj, key, materials, default_bsdf):
+def read_obj(path, key, has_material):
+    """Positions, vertex normals (or None) and triangle indices of an OBJ
+    file, as tracer reads it with `tobj` (`triangulate`, `single_index`):
+    polygons become fans around their first corner, each distinct
+    (position, normal) pair one vertex, and normals are used only when
+    every corner of every face names one. MTL materials are not converted,
+    so a mesh that uses them must name a `material` of its own."""
+    try:
+        f = open(path)
+    except OSError as e:
+        _fail(f"{key}.file", f"cannot read {path}: {e}")
+    positions, normals, corners = [], [], []
+    every_corner_has_normal = True
+    uses_mtl = False
+    with f:
+        for line in f:
+            parts = line.split()
+            if not parts:
+                continue
+            tag = parts[0]
+            if tag == "v":
+                positions.append([float(x) for x in parts[1:4]])
+            elif tag == "vn":
+                normals.append([float(x) for x in parts[1:4]])
+            elif tag == "f":
+                face = []
+                for corner in parts[1:]:
+                    fields = corner.split("/")
+                    v = int(fields[0])
+                    v = v - 1 if v > 0 else len(positions) + v
+                    n = -1
+                    if len(fields) == 3 and fields[2]:
+                        n = int(fields[2])
+                        n = n - 1 if n > 0 else len(normals) + n
+                    else:
+                        every_corner_has_normal = False
+                    face.append((v, n))
+                for i in range(1, len(face) - 1):
+                    corners += [face[0], face[i], face[i + 1]]
+            elif tag in ("mtllib", "usemtl"):
+                uses_mtl = True
+    if uses_mtl and not has_material:
+        _fail(f"{key}.material", "a mesh with MTL materials needs a `material` of its own "
+              "(MTL materials are not converted)")
+    if not corners:
+        _fail(f"{key}.file", f"{path} has no faces")
+    pos = np.asarray(positions, float).reshape(-1, 3)
+    c = np.asarray(corners, np.int64)
+    if c[:, 0].min() < 0 or c[:, 0].max() >= len(pos):
+        _fail(f"{key}.file", f"{path}: a face index is out of range")
+    if every_corner_has_normal and normals:
+        nrm = np.asarray(normals, float).reshape(-1, 3)
+        if c[:, 1].min() < 0 or c[:, 1].max() >= len(nrm):
+            _fail(f"{key}.file", f"{path}: a normal index is out of range")
+        pairs, idx = np.unique(c, axis=0, return_inverse=True)
+        return pos[pairs[:, 0]], nrm[pairs[:, 1]], idx.reshape(-1)
+    return pos, None, c[:, 0]
+
+
+def _object_shapes(obj, key, materials, default_bsdf, folder):
     """Mitsuba meshes for one object (one or two: with and without normals)."""
     if not isinstance(obj, dict) or "type" not in obj:
         _fail(f"{key}.type", "missing")
     kind = obj["type"]
     common = {"type", "material", "transform", "emission", "two_sided"}
-    if kind == "triangles":
+    if kind == "mesh":
+        _keys(obj, key, common | {"file"})
+        pos_n_idx = read_obj(os.path.join(folder, str(obj["file"])), key, "material" in obj)
+    elif kind == "triangles":
         _keys(obj, key, common | {"positions", "indices", "normals", "uvs"})
         pos = np.asarray(obj["positions"], float).reshape(-1, 3)
         idx = np.asarray(obj.get("indices", np.arange(len(pos))), np.int64)
@@ -578,7 +642,7 @@ def convert(scene, *, integrator="path", sampler="independent", spp=None,
 
     count = 0
     for i, obj in enumerate(scene.get("objects", [])):
-        for shape in _object_shapes(obj, f"objects[{i}]", materials, default_bsdf):
+        for shape in _object_shapes(obj, f"objects[{i}]", materials, default_bsdf, folder):
             out[f"shape_{count:04d}"] = shape
             count += 1
 
