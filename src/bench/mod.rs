@@ -86,7 +86,8 @@ pub struct TraceFigures {
     /// The ray set: `primary`, `diffuse`, `incoherent`, `shadow`, or a rays
     /// file's name without extension.
     pub rays: String,
-    /// `closest`, `packet` (closest hits, eight rays at a time) or `any`.
+    /// `closest`, `packet` (closest hits, eight consecutive rays at a
+    /// time), `any` or `packet-any` (any hits, eight at a time).
     pub query: &'static str,
     /// Threads in the pool it ran in.
     pub threads: usize,
@@ -94,7 +95,7 @@ pub struct TraceFigures {
     pub count: usize,
     /// Millions of rays per second, from the median run.
     pub mrays_per_second: f64,
-    /// Rays that hit something (closest and packet) or were occluded (any).
+    /// Rays that hit something (closest hits) or were occluded (any hits).
     pub hits: usize,
     /// Sum of closest-hit distances (closest-hit queries only), to check
     /// two implementations against each other.
@@ -180,8 +181,8 @@ fn trace_closest(bvh: &WideBvh, rays: &[Ray]) -> (usize, f64) {
         .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
-/// Closest hits with packets of consecutive rays (eight neighbouring pixels
-/// of a row, for primary rays).
+/// Closest hits with packets of consecutive rays (for primary rays, eight
+/// neighbouring pixels of a row; for the others, rays drawn independently).
 fn trace_packets(bvh: &WideBvh, rays: &[Ray]) -> (usize, f64) {
     rays.par_chunks(CHUNK)
         .map(|chunk| {
@@ -195,6 +196,18 @@ fn trace_packets(bvh: &WideBvh, rays: &[Ray]) -> (usize, f64) {
             result
         })
         .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+}
+
+/// Any hits with packets of consecutive rays.
+fn trace_any_packets(bvh: &WideBvh, rays: &[Ray]) -> usize {
+    rays.par_chunks(CHUNK)
+        .map(|chunk| {
+            chunk
+                .chunks(PACKET_SIZE)
+                .map(|packet| bvh.occluded_packet(packet).count_ones() as usize)
+                .sum::<usize>()
+        })
+        .sum()
 }
 
 fn trace_any(bvh: &WideBvh, rays: &[Ray]) -> usize {
@@ -261,10 +274,9 @@ pub fn run(path: &Path, options: &BenchOptions) -> Result<BenchReport> {
                 });
             };
             measure("closest", &|| trace_closest(&bvh, rays));
-            if name == "primary" {
-                measure("packet", &|| trace_packets(&bvh, rays));
-            }
+            measure("packet", &|| trace_packets(&bvh, rays));
             measure("any", &|| (trace_any(&bvh, rays), 0.0));
+            measure("packet-any", &|| (trace_any_packets(&bvh, rays), 0.0));
         }
     }
     let report = bvh.report();
@@ -350,13 +362,13 @@ impl BenchReport {
         }
         let _ = writeln!(
             s,
-            "{:<12} {:<8} {:>7} {:>9} {:>10} {:>9} {:>16}",
+            "{:<12} {:<10} {:>7} {:>9} {:>10} {:>9} {:>16}",
             "rays", "query", "threads", "count", "Mrays/s", "hits", "distance sum"
         );
         for t in &self.traces {
             let _ = writeln!(
                 s,
-                "{:<12} {:<8} {:>7} {:>9} {:>10.2} {:>9} {:>16.6e}",
+                "{:<12} {:<10} {:>7} {:>9} {:>10.2} {:>9} {:>16.6e}",
                 t.rays, t.query, t.threads, t.count, t.mrays_per_second, t.hits, t.distance_sum
             );
         }

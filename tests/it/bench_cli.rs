@@ -51,12 +51,16 @@ fn rays_file_hits_and_distances() {
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(report["triangles"], 2);
     let traces = report["traces"].as_array().unwrap();
-    assert_eq!(traces.len(), 4, "closest and any, for 1 and 2 threads");
+    assert_eq!(
+        traces.len(),
+        8,
+        "closest and any, single and packets, for 1 and 2 threads"
+    );
     for t in traces {
         assert_eq!(t["rays"], "probe");
         assert_eq!(t["count"], 5);
         assert_eq!(t["hits"], 2, "{t}");
-        if t["query"] == "closest" {
+        if t["query"] == "closest" || t["query"] == "packet" {
             assert_eq!(t["distance_sum"].as_f64().unwrap(), 5.0);
         }
         assert!(t["mrays_per_second"].as_f64().unwrap() > 0.0);

@@ -368,7 +368,8 @@ fn parallel_build_equals_sequential_build() {
     }
 }
 
-/// Packets return, ray for ray, what single-ray traversal returns: coherent
+/// Packets return, ray for ray, what single-ray traversal returns (closest
+/// and any hits): coherent
 /// packets (neighbouring camera rays), incoherent ones, partial packets, and
 /// rays with their own tmin and tmax.
 #[test]
@@ -392,6 +393,20 @@ fn packets_match_single_rays() {
         for hit in &packet[rays.len()..] {
             assert!(hit.is_none(), "a lane past the packet reported a hit");
         }
+        let blocked = bvh.occluded_packet(rays);
+        for (k, ray) in rays.iter().enumerate() {
+            assert_eq!(
+                blocked & (1 << k) != 0,
+                bvh.occluded(ray),
+                "any hit, ray {k} of a packet of {}: {ray:?}",
+                rays.len()
+            );
+        }
+        assert_eq!(
+            blocked >> rays.len(),
+            0,
+            "a lane past the packet is blocked"
+        );
     };
     for p in 0..500 {
         let origin = rng.vec3(-12.0, 12.0);
@@ -416,6 +431,7 @@ fn packets_match_single_rays() {
     }
     let empty = WideBvh::build(&[]);
     assert!(empty.intersect_packet(&[Ray::new(Vec3::ZERO, Vec3::Z)])[0].is_none());
+    assert_eq!(empty.occluded_packet(&[Ray::new(Vec3::ZERO, Vec3::Z)]), 0);
 }
 
 #[test]

@@ -1,50 +1,72 @@
-//! Packets: up to eight coherent rays (camera rays through neighbouring
-//! pixels) traced together through the 8-wide BVH (Wald, Slusallek, Benthin
-//! and Wagner, "Interactive Rendering with Coherent Ray Tracing", 2001). Each
-//! node is fetched once for the packet, and each child box is tested against
-//! all eight rays in one 8-wide SIMD step; leaves are tested ray by ray with
-//! the single-ray triangle test, so every ray gets exactly the hit it would
-//! get alone. `tracer bench` measures this against single-ray traversal.
+//! Packets: up to eight rays traced together through the 8-wide BVH, one
+//! ray per SIMD lane (Wald, Slusallek, Benthin and Wagner, "Interactive
+//! Rendering with Coherent Ray Tracing", 2001). Each node is fetched once
+//! for the packet and each child box tested against all eight rays in one
+//! 8-wide step; each triangle of a leaf is tested against all eight rays in
+//! one 8-wide watertight test, which computes for every lane exactly what
+//! the single-ray test computes for that ray, so a ray's hit distance is
+//! the same bit for bit either way.
+//!
+//! The packet visits the union of the nodes its rays would visit alone,
+//! so it pays where the rays share most of their nodes: coherent rays
+//! (camera rays through neighbouring pixels), and rays of any kind in a
+//! small scene, where every ray meets most of the tree anyway.
 
-use super::traverse::{leaf, safe_inverse, RayLanes, Stack, EXIT_STRETCH};
-use super::{WideBvh, EMPTY_CHILD, LEAF_BIT, WIDTH};
+use super::traverse::{leaf, safe_inverse, Stack, EXIT_STRETCH};
+use super::{TriangleBlock, WideBvh, EMPTY_CHILD, LEAF_BIT, WIDTH};
 use crate::bvh::Hit;
-use crate::geometry::Ray;
-use wide::f32x8;
+use crate::geometry::triangle::RayShear;
+use crate::geometry::{Aabb, Ray};
+use wide::{f32x8, u32x8};
 
 /// The most rays [`WideBvh::intersect_packet`] traces together: one per
 /// 8-wide SIMD lane.
 pub const PACKET_SIZE: usize = 8;
 
-/// The packet's rays across SIMD lanes. Lanes past the packet's length are
-/// never active.
+/// The packet's rays across SIMD lanes. Lanes past the packet's length
+/// repeat its last ray, and their answers are dropped.
 struct PacketLanes {
     origin: [f32x8; 3],
     inv_dir: [f32x8; 3],
     tmin: f32x8,
+    tmax: f32x8,
+    /// The watertight test's axes of each lane's ray: `axis_is_x[k]` holds
+    /// the lanes whose k-th axis (`kx`, `ky`, `kz`) is x, `axis_is_y[k]`
+    /// those whose is y; the rest are z.
+    axis_is_x: [f32x8; 3],
+    axis_is_y: [f32x8; 3],
+    /// The shear constants `sx`, `sy`, `sz` of each lane's ray.
+    shear: [f32x8; 3],
 }
 
 impl PacketLanes {
     fn new(rays: &[Ray]) -> PacketLanes {
-        let lane = |f: &dyn Fn(&Ray) -> f32| {
-            let mut v = [0.0f32; PACKET_SIZE];
-            for (k, r) in rays.iter().enumerate() {
-                v[k] = f(r);
+        let mut origin = [[0.0f32; PACKET_SIZE]; 3];
+        let mut inv_dir = [[0.0f32; PACKET_SIZE]; 3];
+        let mut axis = [[0.0f32; PACKET_SIZE]; 3];
+        let mut shear = [[0.0f32; PACKET_SIZE]; 3];
+        let (mut tmin, mut tmax) = ([0.0f32; PACKET_SIZE], [0.0f32; PACKET_SIZE]);
+        for k in 0..PACKET_SIZE {
+            let ray = &rays[k.min(rays.len() - 1)];
+            let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+            let (axes, s) = RayShear::new(ray.origin, ray.dir).parts();
+            for a in 0..3 {
+                origin[a][k] = o[a];
+                inv_dir[a][k] = safe_inverse(d[a]);
+                axis[a][k] = axes[a] as f32;
+                shear[a][k] = s[a];
             }
-            f32x8::new(v)
-        };
+            (tmin[k], tmax[k]) = (ray.tmin, ray.tmax);
+        }
+        let axis = axis.map(f32x8::new);
         PacketLanes {
-            origin: [
-                lane(&|r| r.origin.x),
-                lane(&|r| r.origin.y),
-                lane(&|r| r.origin.z),
-            ],
-            inv_dir: [
-                lane(&|r| safe_inverse(r.dir.x)),
-                lane(&|r| safe_inverse(r.dir.y)),
-                lane(&|r| safe_inverse(r.dir.z)),
-            ],
-            tmin: lane(&|r| r.tmin),
+            origin: origin.map(f32x8::new),
+            inv_dir: inv_dir.map(f32x8::new),
+            tmin: f32x8::new(tmin),
+            tmax: f32x8::new(tmax),
+            axis_is_x: axis.map(|a| a.simd_eq(f32x8::ZERO)),
+            axis_is_y: axis.map(|a| a.simd_eq(f32x8::ONE)),
+            shear: shear.map(f32x8::new),
         }
     }
 
@@ -52,17 +74,9 @@ impl PacketLanes {
     /// the nearest entry distance among them.
     #[inline(always)]
     fn enter(&self, bounds: &[[f32; WIDTH]; 6], lane: usize, tmax: f32x8) -> (u32, f32) {
-        let mut near = self.tmin;
-        let mut far = tmax;
-        for axis in 0..3 {
-            let lo = f32x8::splat(bounds[axis][lane]);
-            let hi = f32x8::splat(bounds[axis + 3][lane]);
-            let t0 = (lo - self.origin[axis]) * self.inv_dir[axis];
-            let t1 = (hi - self.origin[axis]) * self.inv_dir[axis];
-            near = near.fast_max(t0.fast_min(t1));
-            far = far.fast_min(t0.fast_max(t1));
-        }
-        let hit = near.simd_le(far * f32x8::splat(EXIT_STRETCH));
+        let lo = [0, 1, 2].map(|a| bounds[a][lane]);
+        let hi = [0, 1, 2].map(|a| bounds[a + 3][lane]);
+        let (hit, near) = self.enter_box(lo, hi, tmax);
         let mask = hit.to_bitmask();
         let nearest = hit
             .select(near, f32x8::splat(f32::INFINITY))
@@ -71,11 +85,101 @@ impl PacketLanes {
             .fold(f32::INFINITY, f32::min);
         (mask, nearest)
     }
+
+    /// The slab test of one box against every lane: which lanes enter it
+    /// within (tmin, `tmax`), and where.
+    #[inline(always)]
+    fn enter_box(&self, lo: [f32; 3], hi: [f32; 3], tmax: f32x8) -> (f32x8, f32x8) {
+        let mut near = self.tmin;
+        let mut far = tmax;
+        for axis in 0..3 {
+            let t0 = (f32x8::splat(lo[axis]) - self.origin[axis]) * self.inv_dir[axis];
+            let t1 = (f32x8::splat(hi[axis]) - self.origin[axis]) * self.inv_dir[axis];
+            near = near.fast_max(t0.fast_min(t1));
+            far = far.fast_min(t0.fast_max(t1));
+        }
+        (near.simd_le(far * f32x8::splat(EXIT_STRETCH)), near)
+    }
+
+    /// The lanes that meet the root's own box.
+    fn enter_root(&self, bounds: &Aabb) -> u32 {
+        let (hit, _) = self.enter_box(bounds.min.to_array(), bounds.max.to_array(), self.tmax);
+        hit.to_bitmask()
+    }
+
+    /// `p[kx]`, `p[ky]`, `p[kz]` of each lane's ray.
+    #[inline(always)]
+    fn permute(&self, p: [f32x8; 3]) -> [f32x8; 3] {
+        [0, 1, 2].map(|k| self.axis_is_x[k].select(p[0], self.axis_is_y[k].select(p[1], p[2])))
+    }
+
+    /// The watertight test of triangle `j` of `block` against every lane's
+    /// ray, the arithmetic of `RayLanes::intersect` lane for lane: which
+    /// lanes hit it within (tmin, `tmax`), their distances, and the
+    /// barycentrics of vertices 1 and 2.
+    #[inline(always)]
+    fn intersect(
+        &self,
+        block: &TriangleBlock,
+        j: usize,
+        tmax: f32x8,
+    ) -> (f32x8, f32x8, f32x8, f32x8) {
+        let [sx, sy, sz] = self.shear;
+        // Vertex positions relative to each ray's origin, sheared so that
+        // ray runs along +z.
+        let project = |v: usize| {
+            let relative = [0, 1, 2].map(|a| f32x8::splat(block.v[v][a][j]) - self.origin[a]);
+            let [x, y, z] = self.permute(relative);
+            (x - sx * z, y - sy * z, z)
+        };
+        let (ax, ay, az) = project(0);
+        let (bx, by, bz) = project(1);
+        let (cx, cy, cz) = project(2);
+        let mut u = cx * by - cy * bx;
+        let mut v = ax * cy - ay * cx;
+        let mut w = bx * ay - by * ax;
+        let zero = f32x8::ZERO;
+        let on_edge = (u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero)).to_bitmask();
+        if on_edge != 0 {
+            // An edge passes (nearly) through a ray: decide those lanes
+            // exactly, as the single-ray tests do. Rare.
+            let (mut ua, mut va, mut wa) = (u.to_array(), v.to_array(), w.to_array());
+            let (ax, ay, bx, by, cx, cy) = (
+                ax.to_array(),
+                ay.to_array(),
+                bx.to_array(),
+                by.to_array(),
+                cx.to_array(),
+                cy.to_array(),
+            );
+            let d =
+                |p: f32, q: f32, r: f32, s: f32| (p as f64 * q as f64 - r as f64 * s as f64) as f32;
+            let mut m = on_edge;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                ua[l] = d(cx[l], by[l], cy[l], bx[l]);
+                va[l] = d(ax[l], cy[l], ay[l], cx[l]);
+                wa[l] = d(bx[l], ay[l], by[l], ax[l]);
+            }
+            (u, v, w) = (f32x8::new(ua), f32x8::new(va), f32x8::new(wa));
+        }
+        let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
+            & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
+        let det = u + v + w;
+        let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
+        let inv_det = f32x8::ONE / det;
+        let t = t_scaled * inv_det;
+        // Comparisons with NaN are false, so a zero determinant never hits.
+        let hit = !outside & det.simd_ne(zero) & t.simd_gt(self.tmin) & t.simd_lt(tmax);
+        (hit, t, v * inv_det, w * inv_det)
+    }
 }
 
 impl WideBvh {
-    /// The closest hit of each of up to eight rays, as `intersect` would
-    /// find it for each ray alone. Fastest when the rays are coherent.
+    /// The closest hit of each of up to eight rays: for each ray the
+    /// distance `intersect` finds for it alone, bit for bit, and the same
+    /// triangle unless two lie at exactly that distance.
     pub fn intersect_packet(&self, rays: &[Ray]) -> [Option<Hit>; PACKET_SIZE] {
         assert!(
             rays.len() <= PACKET_SIZE,
@@ -86,31 +190,24 @@ impl WideBvh {
             return hits;
         }
         let lanes = PacketLanes::new(rays);
-        // Lanes past the packet repeat its last ray; they are never active.
-        let singles: [RayLanes; PACKET_SIZE] =
-            std::array::from_fn(|k| RayLanes::new(&rays[k.min(rays.len() - 1)]));
-        let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
-        let mut active = 0u32;
-        for (k, r) in rays.iter().enumerate() {
-            if singles[k].enters(&self.bounds, r.tmax) {
-                tmax[k] = r.tmax;
-                active |= 1 << k;
-            }
-        }
+        let real = (1u32 << rays.len()) - 1;
+        let active = lanes.enter_root(&self.bounds) & real;
+        let mut tmax = lanes.tmax;
+        let mut triangle = u32x8::splat(u32::MAX);
+        let (mut b1, mut b2) = (f32x8::ZERO, f32x8::ZERO);
         let mut stack = Stack::<(u32, u32, f32)>::new();
         let mut current = (self.root, active);
-        loop {
+        while current.1 != 0 {
             let (reference, mask) = current;
             if reference & LEAF_BIT == 0 {
                 let node = &self.nodes[reference as usize];
-                let tmax_lanes = f32x8::new(tmax);
                 let mut entered = [(0u32, 0u32, 0f32); WIDTH];
                 let mut count = 0;
                 for lane in 0..WIDTH {
                     if node.children[lane] == EMPTY_CHILD {
                         continue;
                     }
-                    let (m, near) = lanes.enter(&node.bounds, lane, tmax_lanes);
+                    let (m, near) = lanes.enter(&node.bounds, lane, tmax);
                     let m = m & mask;
                     if m != 0 {
                         // Nearest first, by the packet's nearest entry.
@@ -131,43 +228,101 @@ impl WideBvh {
                     continue;
                 }
             } else {
+                // Every lane is tested, not only those that entered the
+                // leaf's box: a hit is a hit, wherever the ray's traversal
+                // stands, and masking would cost more than it saves.
                 let (block, count) = leaf(reference);
-                let mut m = mask;
-                while m != 0 {
-                    let k = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    let (mut lanes_hit, t, b1, b2) =
-                        singles[k].intersect(&self.blocks[block], count, tmax[k]);
-                    while lanes_hit != 0 {
-                        let lane = lanes_hit.trailing_zeros() as usize;
-                        lanes_hit &= lanes_hit - 1;
-                        if t[lane] < tmax[k] {
-                            tmax[k] = t[lane];
-                            hits[k] = Some(Hit {
-                                triangle: self.blocks[block].id[lane],
-                                t: t[lane],
-                                b1: b1[lane],
-                                b2: b2[lane],
-                            });
-                        }
+                let block = &self.blocks[block];
+                for j in 0..count as usize {
+                    let (hit, t, v, w) = lanes.intersect(block, j, tmax);
+                    if hit.to_bitmask() & real == 0 {
+                        continue;
                     }
+                    tmax = hit.select(t, tmax);
+                    b1 = hit.select(v, b1);
+                    b2 = hit.select(w, b2);
+                    triangle = hit.select(u32x8::splat(block.id[j]), triangle);
                 }
             }
+            current = (0, 0);
             // Pop the next entry, skipping it when every ray it holds has
             // since found a hit nearer than the packet's entry distance.
-            loop {
-                let Some((reference, mask, near)) = stack.pop() else {
-                    return hits;
-                };
-                let mut m = mask;
-                let mut farthest = f32::NEG_INFINITY;
-                while m != 0 {
-                    let k = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    farthest = farthest.max(tmax[k]);
-                }
-                if near <= farthest * EXIT_STRETCH {
+            while let Some((reference, mask, near)) = stack.pop() {
+                let reach = f32x8::splat(near).simd_le(tmax * f32x8::splat(EXIT_STRETCH));
+                if reach.to_bitmask() & mask != 0 {
                     current = (reference, mask);
+                    break;
+                }
+            }
+        }
+        let (t, b1, b2, triangle) = (
+            tmax.to_array(),
+            b1.to_array(),
+            b2.to_array(),
+            triangle.to_array(),
+        );
+        for k in 0..rays.len() {
+            if triangle[k] != u32::MAX {
+                hits[k] = Some(Hit {
+                    triangle: triangle[k],
+                    t: t[k],
+                    b1: b1[k],
+                    b2: b2[k],
+                });
+            }
+        }
+        hits
+    }
+
+    /// Which of up to eight rays are blocked within (tmin, tmax), as
+    /// `occluded` answers for each ray alone: bit k for ray k.
+    pub fn occluded_packet(&self, rays: &[Ray]) -> u32 {
+        assert!(
+            rays.len() <= PACKET_SIZE,
+            "at most {PACKET_SIZE} rays per packet"
+        );
+        if self.root == EMPTY_CHILD || rays.is_empty() {
+            return 0;
+        }
+        let lanes = PacketLanes::new(rays);
+        let real = (1u32 << rays.len()) - 1;
+        let mut open = lanes.enter_root(&self.bounds) & real;
+        let mut blocked = 0u32;
+        let mut stack = Stack::<(u32, u32)>::new();
+        let mut current = (self.root, open);
+        loop {
+            let (reference, mask) = current;
+            if reference & LEAF_BIT == 0 {
+                let node = &self.nodes[reference as usize];
+                for lane in 0..WIDTH {
+                    if node.children[lane] == EMPTY_CHILD {
+                        continue;
+                    }
+                    let lo = [0, 1, 2].map(|a| node.bounds[a][lane]);
+                    let hi = [0, 1, 2].map(|a| node.bounds[a + 3][lane]);
+                    let m = lanes.enter_box(lo, hi, lanes.tmax).0.to_bitmask() & mask;
+                    if m != 0 {
+                        stack.push((node.children[lane], m));
+                    }
+                }
+            } else {
+                let (block, count) = leaf(reference);
+                let block = &self.blocks[block];
+                for j in 0..count as usize {
+                    blocked |= lanes.intersect(block, j, lanes.tmax).0.to_bitmask() & real;
+                }
+                open &= !blocked;
+                if open == 0 {
+                    return blocked;
+                }
+            }
+            // The next entry with a ray still open.
+            loop {
+                let Some((reference, mask)) = stack.pop() else {
+                    return blocked;
+                };
+                if mask & open != 0 {
+                    current = (reference, mask & open);
                     break;
                 }
             }

@@ -11,7 +11,7 @@ use super::{
 };
 use crate::bvh::Hit;
 use crate::geometry::triangle::RayShear;
-use crate::geometry::{Aabb, Ray};
+use crate::geometry::Ray;
 use std::mem::MaybeUninit;
 use wide::{f32x4, f32x8};
 
@@ -116,21 +116,6 @@ impl RayLanes {
             origin_k: k.map(|axis| f32x4::splat(o[axis])),
             shear: s.map(f32x4::splat),
         }
-    }
-
-    /// Whether the ray meets `bounds` within (tmin, `tmax`): the root's own
-    /// box, which no node holds, tested once per packet ray.
-    pub(super) fn enters(&self, bounds: &Aabb, tmax: f32) -> bool {
-        let (lo, hi) = (bounds.min.to_array(), bounds.max.to_array());
-        let (mut near, mut far) = (self.tmin, tmax);
-        for a in 0..3 {
-            let (origin, inv) = (self.origin[a].as_array()[0], self.inv_dir[a].as_array()[0]);
-            let t0 = (lo[a] - origin) * inv;
-            let t1 = (hi[a] - origin) * inv;
-            near = near.max(t0.min(t1));
-            far = far.min(t0.max(t1));
-        }
-        near <= far * EXIT_STRETCH
     }
 
     /// Entry distances into the node's child boxes, and a bit mask of those
