@@ -78,7 +78,7 @@ DEFAULT_SCENES = ["scenes/cornell-box.json", "scenes/cornell-caustics.json"]
 # What the agreement verdict alone would not tell a reader, by scene name.
 SCENE_NOTES = {
     "dragon": "On the dragon scene the images do differ: Mitsuba starts each ray a fixed "
-              "distance off its surface (about 1e-4 in this 0.2-unit scene), so rays escape "
+              "distance off its surface (about 9e-5 in this 0.2-unit scene), so rays escape "
               "through the mesh's finest creases and its dragon comes out up to a few per cent "
               "brighter; scaled up 100 times, the same scene agrees within 0.1% (rendered, both "
               "renderers, 256 spp), while tracer's image is the same at every scale "
