@@ -12,7 +12,7 @@
 //! (camera rays through neighbouring pixels), and rays of any kind in a
 //! small scene, where every ray meets most of the tree anyway.
 
-use super::traverse::{leaf, safe_inverse, Stack, EXIT_STRETCH};
+use super::traverse::{exact_edges, leaf, safe_inverse, Stack, EXIT_STRETCH};
 use super::{TriangleBlock, WideBvh, EMPTY_CHILD, LEAF_BIT, WIDTH};
 use crate::bvh::Hit;
 use crate::geometry::triangle::RayShear;
@@ -141,27 +141,8 @@ impl PacketLanes {
         let zero = f32x8::ZERO;
         let on_edge = (u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero)).to_bitmask();
         if on_edge != 0 {
-            // An edge passes (nearly) through a ray: decide those lanes
-            // exactly, as the single-ray tests do. Rare.
-            let (mut ua, mut va, mut wa) = (u.to_array(), v.to_array(), w.to_array());
-            let (ax, ay, bx, by, cx, cy) = (
-                ax.to_array(),
-                ay.to_array(),
-                bx.to_array(),
-                by.to_array(),
-                cx.to_array(),
-                cy.to_array(),
-            );
-            let d =
-                |p: f32, q: f32, r: f32, s: f32| (p as f64 * q as f64 - r as f64 * s as f64) as f32;
-            let mut m = on_edge;
-            while m != 0 {
-                let l = m.trailing_zeros() as usize;
-                m &= m - 1;
-                ua[l] = d(cx[l], by[l], cy[l], bx[l]);
-                va[l] = d(ax[l], cy[l], ay[l], cx[l]);
-                wa[l] = d(bx[l], ay[l], by[l], ax[l]);
-            }
+            let xy = [ax, ay, bx, by, cx, cy].map(|c| c.to_array());
+            let [ua, va, wa] = exact_edges(on_edge, xy, [u, v, w].map(|c| c.to_array()));
             (u, v, w) = (f32x8::new(ua), f32x8::new(va), f32x8::new(wa));
         }
         let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))

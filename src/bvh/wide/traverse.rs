@@ -81,6 +81,31 @@ pub(super) fn safe_inverse(c: f32) -> f32 {
     }
 }
 
+/// The edge functions `u`, `v`, `w` of the watertight test, recomputed in
+/// double precision for the lanes in `lanes` (bit k for lane k), where
+/// single precision gave an exact zero: an edge passes (nearly) through
+/// the ray there, and the scalar test decides such lanes exactly too.
+/// `xy` holds the projected vertices' coordinates `ax, ay, bx, by, cx, cy`.
+/// Rare.
+pub(super) fn exact_edges<const N: usize>(
+    lanes: u32,
+    xy: [[f32; N]; 6],
+    uvw: [[f32; N]; 3],
+) -> [[f32; N]; 3] {
+    let [ax, ay, bx, by, cx, cy] = xy;
+    let [mut u, mut v, mut w] = uvw;
+    let d = |p: f32, q: f32, r: f32, s: f32| (p as f64 * q as f64 - r as f64 * s as f64) as f32;
+    let mut m = lanes;
+    while m != 0 {
+        let l = m.trailing_zeros() as usize;
+        m &= m - 1;
+        u[l] = d(cx[l], by[l], cy[l], bx[l]);
+        v[l] = d(ax[l], cy[l], ay[l], cx[l]);
+        w[l] = d(bx[l], ay[l], by[l], ax[l]);
+    }
+    [u, v, w]
+}
+
 /// The ray, splatted across lanes, with what every test reuses. Every
 /// field is read at a fixed position (the per-ray axis choices index the
 /// node and the block, never this struct), so the compiler can keep it in
@@ -164,27 +189,8 @@ impl RayLanes {
         let zero = f32x4::ZERO;
         let on_edge = (u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero)).to_bitmask() & lanes;
         if on_edge != 0 {
-            // An edge passes (nearly) through the ray: decide those lanes
-            // exactly, as the scalar test does. Rare.
-            let (mut ua, mut va, mut wa) = (u.to_array(), v.to_array(), w.to_array());
-            let (ax, ay, bx, by, cx, cy) = (
-                ax.to_array(),
-                ay.to_array(),
-                bx.to_array(),
-                by.to_array(),
-                cx.to_array(),
-                cy.to_array(),
-            );
-            let d =
-                |p: f32, q: f32, r: f32, s: f32| (p as f64 * q as f64 - r as f64 * s as f64) as f32;
-            let mut m = on_edge;
-            while m != 0 {
-                let l = m.trailing_zeros() as usize;
-                m &= m - 1;
-                ua[l] = d(cx[l], by[l], cy[l], bx[l]);
-                va[l] = d(ax[l], cy[l], ay[l], cx[l]);
-                wa[l] = d(bx[l], ay[l], by[l], ax[l]);
-            }
+            let xy = [ax, ay, bx, by, cx, cy].map(|c| c.to_array());
+            let [ua, va, wa] = exact_edges(on_edge, xy, [u, v, w].map(|c| c.to_array()));
             (u, v, w) = (f32x4::new(ua), f32x4::new(va), f32x4::new(wa));
         }
         let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
