@@ -9,8 +9,9 @@
 //!
 //! The packet visits the union of the nodes its rays would visit alone,
 //! so it pays where the rays share most of their nodes: coherent rays
-//! (camera rays through neighbouring pixels), and rays of any kind in a
-//! small scene, where every ray meets most of the tree anyway.
+//! (camera rays through neighbouring pixels). Rays that go their own ways
+//! lose, even in the Cornell box's three-node tree, where eight of them
+//! visit nearly every leaf (docs/benchmarks.md, "Ray packets").
 
 use super::traverse::{exact_edges, leaf, safe_inverse, Stack, EXIT_STRETCH};
 use super::{TriangleBlock, WideBvh, EMPTY_CHILD, LEAF_BIT, WIDTH};
