@@ -1,8 +1,8 @@
 //! The 8-wide BVH every integrator traces: each node holds its eight
 //! children's boxes as structure-of-arrays, so one 8-lane SIMD slab test
 //! checks all eight at once, and each leaf is a block of up to four
-//! triangles, also as structure-of-arrays, so one 4-lane SIMD test checks
-//! all four triangles. Blocks are stored in leaf order: a hit reads its
+//! triangles, also as structure-of-arrays, so one 8-lane SIMD test checks
+//! the triangles of two blocks. Blocks are stored in leaf order: a hit reads its
 //! triangle's data from the block itself.
 //!
 //! Eight children rather than four: an 8-lane box test costs about what a
