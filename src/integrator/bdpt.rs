@@ -232,6 +232,7 @@ pub(super) fn start_camera_walk(
         d_vm: 0.0,
         merging,
         finite_start: true,
+        weighted: true,
     };
     Some((walk, index))
 }

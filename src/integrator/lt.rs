@@ -36,9 +36,10 @@ impl LightTracer {
         sink: &mut SampleSink,
     ) {
         sampler.start_vertex();
-        let Some(start) = start_light_walk(scene, sampler, MergeWeights::NONE) else {
+        let Some(mut start) = start_light_walk(scene, sampler, MergeWeights::NONE) else {
             return;
         };
+        start.walk.weighted = false;
         let paths = light_paths_per_pass(camera);
         let lens = sample_lens(camera, sampler);
         splat_light_point(scene, camera, lens, &start, paths, sink);

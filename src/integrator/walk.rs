@@ -19,7 +19,7 @@ use crate::color::Rgb;
 use crate::geometry::ray::offset_origin;
 use crate::geometry::SurfacePoint;
 use crate::light::EmissionSample;
-use crate::material::{Bsdf, Transport};
+use crate::material::{Bsdf, BsdfSample, Transport};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -49,6 +49,10 @@ pub struct Walk {
     /// camera walk buys little. A camera walk also multiplies in eta² at
     /// each refraction, undoing the 1/eta² its radiance throughput takes.
     pub roulette_scale: f32,
+    /// Whether the walk keeps `d_vcm`, `d_vc` and `d_vm` up to date. The
+    /// light tracer, which weighs its paths against no other strategy,
+    /// turns it off and saves a reverse density and the divisions per bounce.
+    pub weighted: bool,
 }
 
 /// A non-delta vertex of a light subpath, kept for connections.
@@ -98,6 +102,9 @@ impl Walk {
     /// Updates the MIS quantities for arriving at a surface at `distance`
     /// with `cos_in` between the ray and the geometric normal (report eq. 31).
     pub fn arrive(&mut self, distance: f32, cos_in: f32) {
+        if !self.weighted {
+            return;
+        }
         if self.length > 1 || self.finite_start {
             self.d_vcm *= mis(distance * distance);
         }
@@ -122,22 +129,8 @@ impl Walk {
         let Some(s) = bsdf.sample(wo, u, u_lobe, mode) else {
             return false;
         };
-        let cos_out = s.wi.dot(surface.geometric_normal).abs();
-        if s.delta {
-            // Report eqs. 34–36 for a specular vertex: it can be neither
-            // connected nor merged at.
-            let c = mis(cos_out);
-            self.d_vcm = 0.0;
-            self.d_vc *= c;
-            self.d_vm *= c;
-        } else {
-            let (_, reverse_pdf) = bsdf.pdfs(wo, s.wi);
-            let (scale, reverse) = (mis(cos_out / s.pdf), mis(reverse_pdf));
-            // With merging off, `+ vm` adds an exact zero: BDPT's weights
-            // are bit for bit those of the report's BDPT form.
-            self.d_vc = scale * (self.d_vc * reverse + self.d_vcm + self.merging.vm);
-            self.d_vm = scale * (self.d_vm * reverse + self.d_vcm * self.merging.vc + 1.0);
-            self.d_vcm = mis(1.0 / s.pdf);
+        if self.weighted {
+            self.update_weights(bsdf, wo, &s, surface);
         }
         self.throughput *= s.weight;
         if mode == Transport::Radiance {
@@ -160,6 +153,26 @@ impl Walk {
             self.throughput /= survive;
         }
         true
+    }
+
+    /// The MIS quantities after scattering into `s` (report eqs. 34–36).
+    fn update_weights(&mut self, bsdf: &Bsdf, wo: Vec3, s: &BsdfSample, surface: &SurfacePoint) {
+        let cos_out = s.wi.dot(surface.geometric_normal).abs();
+        if s.delta {
+            // A specular vertex can be neither connected nor merged at.
+            let c = mis(cos_out);
+            self.d_vcm = 0.0;
+            self.d_vc *= c;
+            self.d_vm *= c;
+        } else {
+            let (_, reverse_pdf) = bsdf.pdfs(wo, s.wi);
+            let (scale, reverse) = (mis(cos_out / s.pdf), mis(reverse_pdf));
+            // With merging off, `+ vm` adds an exact zero: BDPT's weights
+            // are bit for bit those of the report's BDPT form.
+            self.d_vc = scale * (self.d_vc * reverse + self.d_vcm + self.merging.vm);
+            self.d_vm = scale * (self.d_vm * reverse + self.d_vcm * self.merging.vc + 1.0);
+            self.d_vcm = mis(1.0 / s.pdf);
+        }
     }
 }
 
@@ -227,6 +240,7 @@ pub fn start_light_walk(
         d_vm: d_vc * merging.vc,
         merging,
         finite_start: light.is_finite(),
+        weighted: true,
     };
     Some(LightStart {
         walk,
