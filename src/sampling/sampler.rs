@@ -17,7 +17,7 @@ use sobol_burley::parts::{self, Int4};
 use std::sync::OnceLock;
 
 /// Hash of 32-bit words (a variant of the lowbias32 finaliser by C. Wellons).
-pub fn hash(mut x: u32) -> u32 {
+pub const fn hash(mut x: u32) -> u32 {
     x ^= x >> 16;
     x = x.wrapping_mul(0x21f0_aaad);
     x ^= x >> 15;
@@ -28,8 +28,25 @@ pub fn hash(mut x: u32) -> u32 {
 
 /// Hash of the pair (`a`, `b`); order matters.
 pub fn hash_combine(a: u32, b: u32) -> u32 {
-    hash(a ^ hash(b).wrapping_add(0x9e37_79b9))
+    hash(a ^ combine_key(b))
 }
+
+/// What `hash_combine` mixes in for its second argument.
+const fn combine_key(b: u32) -> u32 {
+    hash(b).wrapping_add(0x9e37_79b9)
+}
+
+/// `combine_key` of the first group numbers, worked out at compile time: a
+/// path of up to 31 vertices opens no more groups than these.
+const GROUP_KEYS: [u32; 64] = {
+    let mut keys = [0; 64];
+    let mut g = 0;
+    while g < 64 {
+        keys[g] = combine_key(g as u32);
+        g += 1;
+    }
+    keys
+};
 
 /// The sequence length `sobol_burley` supports; later samples continue with a
 /// freshly seeded sequence.
@@ -59,11 +76,12 @@ fn sobol_tables() -> &'static SobolTables {
 }
 
 /// Four Owen-scrambled Sobol dimensions: exactly `sobol_burley::sample_4d(
-/// index, 0, seed)` (a test checks it), with the Sobol point from the tables.
+/// index, 0, seed)` (a test checks it) for `index_reversed` =
+/// `index.reverse_bits()`, with the Sobol point from the tables.
 #[inline]
-fn sample_4d(tables: &SobolTables, index: u32, seed: u32) -> [f32; 4] {
+fn sample_4d(tables: &SobolTables, index_reversed: u32, seed: u32) -> [f32; 4] {
     // Shuffle the index: a statistically independent sequence per seed.
-    let shuffled = parts::owen_scramble_rev(index.reverse_bits(), parts::hash(seed ^ 0x79c6_8e4a));
+    let shuffled = parts::owen_scramble_rev(index_reversed, parts::hash(seed ^ 0x79c6_8e4a));
     let sobol =
         tables.high[(shuffled >> 24) as usize] ^ tables.low[((shuffled >> 16) & 0xff) as usize];
     // The crate's per-dimension scrambles of `seed` (for dimension set 0).
@@ -79,7 +97,9 @@ fn sample_4d(tables: &SobolTables, index: u32, seed: u32) -> [f32; 4] {
 pub struct Sampler {
     tables: &'static SobolTables,
     pixel_seed: u32,
-    index: u32,
+    /// The sample index within its sequence, bit-reversed once here rather
+    /// than at every group.
+    index_reversed: u32,
     group: u32,
     cached: [f32; 4],
     used: usize,
@@ -105,7 +125,7 @@ impl Sampler {
         Sampler {
             tables: sobol_tables(),
             pixel_seed: hash_combine(pixel.0, block),
-            index: (index % SEQUENCE_LENGTH as u64) as u32,
+            index_reversed: ((index % SEQUENCE_LENGTH as u64) as u32).reverse_bits(),
             group: 0,
             cached: [0.0; 4],
             used: 4,
@@ -115,8 +135,12 @@ impl Sampler {
     /// A number in [0, 1).
     pub fn next_1d(&mut self) -> f32 {
         if self.used == 4 {
-            let seed = hash_combine(self.pixel_seed, self.group);
-            self.cached = sample_4d(self.tables, self.index, seed);
+            let key = match GROUP_KEYS.get(self.group as usize) {
+                Some(&key) => key,
+                None => combine_key(self.group),
+            };
+            let seed = hash(self.pixel_seed ^ key);
+            self.cached = sample_4d(self.tables, self.index_reversed, seed);
             self.group += 1;
             self.used = 0;
         }
@@ -149,7 +173,7 @@ mod tests {
         let mut seed = 12345u32;
         for index in (0..SEQUENCE_LENGTH).step_by(7).chain([SEQUENCE_LENGTH - 1]) {
             seed = hash(seed);
-            let ours = sample_4d(tables, index, seed);
+            let ours = sample_4d(tables, index.reverse_bits(), seed);
             let crate_4d = sobol_burley::sample_4d(index, 0, seed);
             assert_eq!(
                 ours.map(f32::to_bits),
@@ -172,12 +196,13 @@ mod tests {
             let block = (index / SEQUENCE_LENGTH as u64) as u32;
             let seed = hash_combine(pixel.0, block);
             let i = (index % SEQUENCE_LENGTH as u64) as u32;
-            let group = |g: u32| sample_4d(tables, i, hash_combine(seed, g));
+            let group = |g: u32| sample_4d(tables, i.reverse_bits(), hash_combine(seed, g));
             // A pinhole camera sample, then vertices of light, BSDF and
             // roulette draws, as the path tracer makes them.
             let (x, y) = sampler.next_2d();
             assert_eq!([x, y], group(0)[..2]);
-            for vertex in 0..5u32 {
+            // 40 vertices: past the groups whose keys are precomputed.
+            for vertex in 0..40u32 {
                 sampler.start_vertex();
                 let (g_light, g_bsdf) = (1 + 2 * vertex, 2 + 2 * vertex);
                 let select = sampler.next_1d();
