@@ -1,6 +1,6 @@
 //! Maps from the unit square to directions and points, with their densities.
 
-use glam::{Vec2, Vec3};
+use glam::{BVec4A, Vec2, Vec3, Vec4};
 use std::f32::consts::{FRAC_1_PI, PI};
 
 /// Concentric map of the square onto the unit disk (Shirley and Chiu 1997).
@@ -16,14 +16,29 @@ pub fn concentric_disk(u: f32, v: f32) -> Vec2 {
     if a == 0.0 && b == 0.0 {
         return Vec2::ZERO;
     }
-    if a.abs() > b.abs() {
-        let (sin, cos) = sin_cos_quarter(PI / 4.0 * (b / a));
-        Vec2::new(a * cos, a * sin)
-    } else {
-        // φ = π/2 − θ: cos φ = sin θ, sin φ = cos θ.
-        let (sin, cos) = sin_cos_quarter(PI / 4.0 * (a / b));
-        Vec2::new(b * sin, b * cos)
-    }
+    // Which wedge a sample falls in is a coin toss: selects, not branches,
+    // so the branch predictor has nothing to miss.
+    let wide = a.abs() > b.abs();
+    let (r, other) = select_pair(wide, (a, b), (b, a));
+    let (sin, cos) = sin_cos_quarter(PI / 4.0 * (other / r));
+    // In the upper and lower wedges φ = π/2 − θ: cos φ = sin θ, sin φ = cos θ.
+    let (x, y) = select_pair(wide, (cos, sin), (sin, cos));
+    Vec2::new(r * x, r * y)
+}
+
+/// `if_true` when `condition` holds, else `if_false`, by SIMD mask
+/// arithmetic. For a condition that is a coin toss per sample, a branch
+/// mispredicts half the time; the compiler turns a scalar select back into
+/// a branch when it sees fit (even one marked unpredictable), a vector one
+/// it does not.
+#[inline(always)]
+fn select_pair(condition: bool, if_true: (f32, f32), if_false: (f32, f32)) -> (f32, f32) {
+    let picked = Vec4::select(
+        BVec4A::splat(condition),
+        Vec4::new(if_true.0, if_true.1, 0.0, 0.0),
+        Vec4::new(if_false.0, if_false.1, 0.0, 0.0),
+    );
+    (picked.x, picked.y)
 }
 
 /// sin and cos of `x` for |x| ≤ π/4, by their Taylor series to x⁹ and x¹⁰:
@@ -69,11 +84,8 @@ pub const UNIFORM_SPHERE_PDF: f32 = 1.0 / (4.0 * PI);
 /// Uniform barycentrics (b1, b2) on a triangle, by the square-to-triangle map
 /// that folds the square along its diagonal.
 pub fn uniform_triangle(u: f32, v: f32) -> (f32, f32) {
-    if u + v > 1.0 {
-        (1.0 - u, 1.0 - v)
-    } else {
-        (u, v)
-    }
+    // Half the samples fold: a select, as in `concentric_disk`.
+    select_pair(u + v > 1.0, (1.0 - u, 1.0 - v), (u, v))
 }
 
 /// Uniform direction in the cone of half-angle acos(`cos_max`) around +z.
