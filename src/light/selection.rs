@@ -1,13 +1,15 @@
 //! Picks which light to sample, with probability proportional to its power,
-//! so bright lights get the shadow rays.
+//! so bright lights get the shadow rays. An alias table makes the choice in
+//! constant time, whatever the number of lights (every emissive triangle
+//! is one).
 
 use super::Light;
-use crate::sampling::Distribution1D;
+use crate::sampling::AliasTable;
 
 /// Chooses a light with probability proportional to its [`Light::power`].
 #[derive(Clone, Debug, Default)]
 pub struct LightSelector {
-    distribution: Option<Distribution1D>,
+    distribution: Option<AliasTable>,
 }
 
 impl LightSelector {
@@ -16,7 +18,7 @@ impl LightSelector {
     pub fn new(lights: &[Light]) -> LightSelector {
         let powers: Vec<f32> = lights.iter().map(Light::power).collect();
         LightSelector {
-            distribution: Distribution1D::new(&powers),
+            distribution: AliasTable::new(&powers),
         }
     }
 
