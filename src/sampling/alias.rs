@@ -8,8 +8,8 @@
 //! search, whose branches a random number makes a coin toss each: the light
 //! selector, sampled once per path vertex, uses this table.
 
-/// A discrete distribution over `0..len()`, proportional to non-negative
-/// weights (negative and NaN weights count as zero).
+/// A discrete distribution over the indices of its weights, proportional to
+/// them (negative and NaN weights count as zero).
 #[derive(Clone, Debug, Default)]
 pub struct AliasTable {
     bins: Vec<Bin>,
@@ -77,16 +77,6 @@ impl AliasTable {
             };
         }
         Some(AliasTable { bins, pmf })
-    }
-
-    /// Number of entries, including zero-weight ones.
-    pub fn len(&self) -> usize {
-        self.pmf.len()
-    }
-
-    /// Whether there are no entries (never true of one built by [`AliasTable::new`]).
-    pub fn is_empty(&self) -> bool {
-        self.pmf.is_empty()
     }
 
     /// Probability of entry `i`. Panics when `i >= len()`.
