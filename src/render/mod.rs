@@ -295,3 +295,34 @@ fn splat_buffers(pixels: u64, splatting: bool) -> [Vec<DVec3>; 2] {
     let n = if splatting { pixels as usize } else { 0 };
     [vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A splatting render adds each batch of tiles' splats, and counts its
+    /// light paths, exactly once, also when batches are added while later
+    /// ones render: 10 x 9 tiles of 16 pixels are two batches of 64.
+    #[test]
+    fn every_batch_of_light_paths_is_counted_once() {
+        let (scene, mut settings) =
+            crate::scene::load(std::path::Path::new("scenes/cornell-box.json")).unwrap();
+        settings.integrator = crate::settings::IntegratorKind::Lt;
+        (settings.film.width, settings.film.height) = (160, 144);
+        settings.stop.spp = 4;
+        settings.stop.time_limit = None;
+        for threads in [1, 2] {
+            let options = RenderOptions {
+                threads: Some(threads),
+                progress: false,
+                ..RenderOptions::default()
+            };
+            let (acc, _) = run(&scene, &settings, &options, false, |_, _| {}).unwrap();
+            assert_eq!(
+                acc.light_paths.iter().sum::<u64>(),
+                160 * 144 * 4,
+                "{threads} threads"
+            );
+        }
+    }
+}

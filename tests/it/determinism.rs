@@ -102,3 +102,45 @@ fn different_seeds_give_different_noise() {
     let b = image(cornell(2));
     assert_ne!(a, b);
 }
+
+/// Splatting renders add a batch's splats while the next batch renders: an
+/// image of more 16 x 16 tiles than one batch holds (64) takes that path.
+/// Every thread count must give the same bits (that every batch is added
+/// exactly once is checked in `render`'s own tests, by the paths counted).
+#[test]
+fn splats_of_many_batches_add_up_alike_for_any_thread_count() {
+    use tracer::settings::IntegratorKind;
+    let _guard = common::heavy();
+    let (scene, mut settings) = common::load_scene("scenes/cornell-box.json");
+    // 10 x 9 = 90 tiles: two batches.
+    settings.film.width = 160;
+    settings.film.height = 144;
+    settings.stop.spp = 4;
+    settings.seed = 3;
+    let image = |integrator: IntegratorKind, threads: usize| {
+        let mut settings = settings.clone();
+        settings.integrator = integrator;
+        let options = RenderOptions {
+            threads: Some(threads),
+            progress: false,
+            ..RenderOptions::default()
+        };
+        render(&scene, &settings, &options).unwrap().0
+    };
+    let bits = |i: &tracer::film::Image| {
+        i.pixels
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    for integrator in [IntegratorKind::Lt, IntegratorKind::Bdpt] {
+        let one = bits(&image(integrator, 1));
+        for threads in [2, 3] {
+            assert!(
+                one == bits(&image(integrator, threads)),
+                "{}: 1 vs {threads} threads",
+                integrator.name()
+            );
+        }
+    }
+}
