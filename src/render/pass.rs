@@ -108,9 +108,10 @@ impl Pass<'_> {
         };
         pool.install(|| {
             // Each batch's splats are added, in tile order, while the next
-            // batch renders: adding them is serial work (about 3% of a light
-            // tracer's time on two threads), which would otherwise leave
-            // every other thread idle, a loss that grows with the thread count.
+            // batch renders: adding them is serial work (0.09 s of a 2.9 s
+            // Cornell box `lt` render on two threads, timed; see
+            // docs/benchmarks.md), which would otherwise leave every other
+            // thread idle, a loss that grows with the thread count.
             let mut pending: Option<(&[Tile], Vec<Option<TileOutput>>)> = None;
             for chunk in tiles.chunks_mut(batch) {
                 let mut render = || {

@@ -14,6 +14,26 @@ fn cornell(seed: u64) -> (Scene, Settings) {
     (scene, settings)
 }
 
+/// `settings` rendered on `threads` worker threads.
+fn render_on(scene: &Scene, settings: &Settings, threads: usize) -> tracer::film::Image {
+    let options = RenderOptions {
+        threads: Some(threads),
+        progress: false,
+        ..RenderOptions::default()
+    };
+    render(scene, settings, &options).unwrap().0
+}
+
+/// Every pixel's channels as bits: equal only when the images are the same
+/// to the last bit (NaN included).
+fn bits(image: &tracer::film::Image) -> Vec<u32> {
+    image
+        .pixels
+        .iter()
+        .flat_map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
 /// The scene's own integrator (path tracing), and VCM with a radius wide
 /// enough that merges happen: its merges sum over the grid in a fixed
 /// order, and its light pass gathers its rows in order.
@@ -29,22 +49,9 @@ fn same_seed_same_image_for_any_thread_count() {
         settings.vcm_radius = radius;
         let images: Vec<_> = [1, 2, 3]
             .iter()
-            .map(|&threads| {
-                let options = RenderOptions {
-                    threads: Some(threads),
-                    progress: false,
-                    ..RenderOptions::default()
-                };
-                render(&scene, &settings, &options).unwrap().0
-            })
+            .map(|&threads| render_on(&scene, &settings, threads))
             .collect();
         assert!(images[0].mean().x > 0.0);
-        let bits = |i: &tracer::film::Image| {
-            i.pixels
-                .iter()
-                .flat_map(|p| p.to_array().map(f32::to_bits))
-                .collect::<Vec<_>>()
-        };
         let what = settings.integrator.name();
         assert_eq!(bits(&images[0]), bits(&images[1]), "{what}: 1 vs 2 threads");
         assert_eq!(bits(&images[0]), bits(&images[2]), "{what}: 1 vs 3 threads");
@@ -120,18 +127,7 @@ fn splats_of_many_batches_add_up_alike_for_any_thread_count() {
     let image = |integrator: IntegratorKind, threads: usize| {
         let mut settings = settings.clone();
         settings.integrator = integrator;
-        let options = RenderOptions {
-            threads: Some(threads),
-            progress: false,
-            ..RenderOptions::default()
-        };
-        render(&scene, &settings, &options).unwrap().0
-    };
-    let bits = |i: &tracer::film::Image| {
-        i.pixels
-            .iter()
-            .flat_map(|p| p.to_array().map(f32::to_bits))
-            .collect::<Vec<_>>()
+        render_on(&scene, &settings, threads)
     };
     for integrator in [IntegratorKind::Lt, IntegratorKind::Bdpt] {
         let one = bits(&image(integrator, 1));

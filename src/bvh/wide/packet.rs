@@ -13,7 +13,7 @@
 //! lose, even in the Cornell box's three-node tree, where eight of them
 //! visit nearly every leaf (docs/benchmarks.md, "Ray packets").
 
-use super::traverse::{exact_edges, leaf, safe_inverse, Stack, EXIT_STRETCH};
+use super::traverse::{leaf, safe_inverse, watertight_lanes, Stack, EXIT_STRETCH};
 use super::{TriangleBlock, WideBvh, EMPTY_CHILD, LEAF_BIT, WIDTH};
 use crate::bvh::Hit;
 use crate::geometry::triangle::RayShear;
@@ -133,28 +133,13 @@ impl PacketLanes {
             let [x, y, z] = self.permute(relative);
             (x - sx * z, y - sy * z, z)
         };
-        let (ax, ay, az) = project(0);
-        let (bx, by, bz) = project(1);
-        let (cx, cy, cz) = project(2);
-        let mut u = cx * by - cy * bx;
-        let mut v = ax * cy - ay * cx;
-        let mut w = bx * ay - by * ax;
-        let zero = f32x8::ZERO;
-        let on_edge = (u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero)).to_bitmask();
-        if on_edge != 0 {
-            let xy = [ax, ay, bx, by, cx, cy].map(|c| c.to_array());
-            let [ua, va, wa] = exact_edges(on_edge, xy, [u, v, w].map(|c| c.to_array()));
-            (u, v, w) = (f32x8::new(ua), f32x8::new(va), f32x8::new(wa));
-        }
-        let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
-            & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
-        let det = u + v + w;
-        let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
-        let inv_det = f32x8::ONE / det;
-        let t = t_scaled * inv_det;
-        // Comparisons with NaN are false, so a zero determinant never hits.
-        let hit = !outside & det.simd_ne(zero) & t.simd_gt(self.tmin) & t.simd_lt(tmax);
-        (hit, t, v * inv_det, w * inv_det)
+        watertight_lanes(
+            [project(0), project(1), project(2)],
+            sz,
+            0xff,
+            self.tmin,
+            tmax,
+        )
     }
 }
 

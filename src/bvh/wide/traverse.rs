@@ -209,38 +209,58 @@ impl RayLanes {
             let z = both(&p[kz], &q[kz]) - oz;
             (x - sx * z, y - sy * z, z)
         };
-        let (ax, ay, az) = project(0);
-        let (bx, by, bz) = project(1);
-        let (cx, cy, cz) = project(2);
-        let mut u = cx * by - cy * bx;
-        let mut v = ax * cy - ay * cx;
-        let mut w = bx * ay - by * ax;
         let lanes = ((1u32 << count_a) - 1) | (((1u32 << count_b) - 1) << 4);
-        let zero = f32x8::ZERO;
-        let on_edge = (u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero)).to_bitmask() & lanes;
-        if on_edge != 0 {
-            let xy = [ax, ay, bx, by, cx, cy].map(|c| c.to_array());
-            let [ua, va, wa] = exact_edges(on_edge, xy, [u, v, w].map(|c| c.to_array()));
-            (u, v, w) = (f32x8::new(ua), f32x8::new(va), f32x8::new(wa));
-        }
-        let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
-            & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
-        let det = u + v + w;
-        let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
-        let inv_det = f32x8::ONE / det;
-        let t = t_scaled * inv_det;
-        // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
-        let hit = !outside
-            & det.simd_ne(zero)
-            & t.simd_gt(f32x8::splat(self.tmin))
-            & t.simd_lt(f32x8::splat(tmax));
+        let (hit, t, b1, b2) = watertight_lanes(
+            [project(0), project(1), project(2)],
+            sz,
+            lanes,
+            f32x8::splat(self.tmin),
+            f32x8::splat(tmax),
+        );
         (
             hit.to_bitmask() & lanes,
             t.to_array(),
-            (v * inv_det).to_array(),
-            (w * inv_det).to_array(),
+            b1.to_array(),
+            b2.to_array(),
         )
     }
+}
+
+/// The watertight test on eight lanes, from each lane's three vertices
+/// already made relative to its ray's origin and sheared (x, y, and the
+/// unscaled z): the edge functions, decided in double precision where single
+/// precision gives an exact zero in a lane of `lanes`, then a mask of the
+/// lanes hit within (`tmin`, `tmax`), their distances, and the barycentrics
+/// of vertices 1 and 2. Shared by the single-ray test (eight triangles,
+/// one ray) and the packet test (one triangle, eight rays).
+#[inline(always)]
+pub(super) fn watertight_lanes(
+    vertices: [(f32x8, f32x8, f32x8); 3],
+    sz: f32x8,
+    lanes: u32,
+    tmin: f32x8,
+    tmax: f32x8,
+) -> (f32x8, f32x8, f32x8, f32x8) {
+    let [(ax, ay, az), (bx, by, bz), (cx, cy, cz)] = vertices;
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    let zero = f32x8::ZERO;
+    let on_edge = (u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero)).to_bitmask() & lanes;
+    if on_edge != 0 {
+        let xy = [ax, ay, bx, by, cx, cy].map(|c| c.to_array());
+        let [ua, va, wa] = exact_edges(on_edge, xy, [u, v, w].map(|c| c.to_array()));
+        (u, v, w) = (f32x8::new(ua), f32x8::new(va), f32x8::new(wa));
+    }
+    let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
+        & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
+    let det = u + v + w;
+    let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
+    let inv_det = f32x8::ONE / det;
+    let t = t_scaled * inv_det;
+    // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
+    let hit = !outside & det.simd_ne(zero) & t.simd_gt(tmin) & t.simd_lt(tmax);
+    (hit, t, v * inv_det, w * inv_det)
 }
 
 impl WideBvh {
