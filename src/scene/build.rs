@@ -5,7 +5,7 @@
 use super::builder::Builder;
 use super::cache::{self, Cache, CacheUse};
 use super::estimate;
-use super::{Scene, TriangleShading};
+use super::{Facet, Scene, TriangleShading};
 use crate::bvh::{BuildOptions, WideBvh};
 use crate::color::Rgb;
 use crate::error::Error;
@@ -161,6 +161,7 @@ pub fn build_limited(
         lights,
         bvh: geometry.bvh,
         bounds,
+        facets: geometry.triangles.iter().map(Facet::new).collect(),
         triangles: geometry.triangles,
         shading: geometry.shading,
         materials,

@@ -46,6 +46,28 @@ impl TriangleShading {
     }
 }
 
+/// What surface reconstruction reads of a triangle's vertices at every
+/// hit, worked out once at load: the unit normal of its plane (a cross
+/// product and a square root) and its largest coordinate (nine
+/// comparisons). Not cached: it is a pass over the triangles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Facet {
+    /// `Triangle::normal`: the winding's unit normal.
+    pub normal: Vec3,
+    /// `ray::magnitude` of the vertices, for `offset_origin`.
+    pub magnitude: f32,
+}
+
+impl Facet {
+    /// The facts of `triangle`.
+    pub fn new(triangle: &Triangle) -> Facet {
+        Facet {
+            normal: triangle.normal(),
+            magnitude: crate::geometry::ray::magnitude(&triangle.v),
+        }
+    }
+}
+
 /// What loading noticed that the user should hear about.
 #[derive(Clone, Debug, Default)]
 pub struct LoadReport {
@@ -69,6 +91,8 @@ pub struct Scene {
     pub triangles: PodArray<Triangle>,
     /// Shading data of each triangle, by the same index.
     pub shading: PodArray<TriangleShading>,
+    /// Each triangle's plane normal and scale, by the same index.
+    pub facets: Vec<Facet>,
     /// The materials, by the index [`TriangleShading::material`] holds.
     pub materials: Vec<Material>,
     /// Each material's name, by the same index (MTL materials: `mesh.obj:name`).
@@ -114,9 +138,10 @@ impl Scene {
         let i = hit.triangle as usize;
         let tri = &self.triangles[i];
         let sh = &self.shading[i];
+        let facet = self.facets[i];
         let (b1, b2) = (hit.b1, hit.b2);
         let b0 = 1.0 - b1 - b2;
-        let ng = tri.normal();
+        let ng = facet.normal;
         let ns = match sh.has_normals().then_some(sh.normals) {
             Some(n) => {
                 let n = (b0 * n[0] + b1 * n[1] + b2 * n[2]).normalize_or_zero();
@@ -133,7 +158,7 @@ impl Scene {
             geometric_normal: ng,
             shading_normal: ns,
             uv: b0 * sh.uvs[0] + b1 * sh.uvs[1] + b2 * sh.uvs[2],
-            magnitude: crate::geometry::ray::magnitude(&tri.v),
+            magnitude: facet.magnitude,
         }
     }
 }
