@@ -389,6 +389,19 @@ impl Bsdf {
 
     /// |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|): one unless the normals differ.
     fn shading_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
+        // Flat shading: numerator and denominator are the same product d,
+        // so the general form below gives one, zero where d is zero, NaN
+        // where d is; two dot products and a division fewer.
+        if self.frame.n == self.ng {
+            let d = wo.dot(self.ng).abs() * wi.dot(self.ng).abs();
+            return if d > 0.0 {
+                1.0
+            } else if d <= 0.0 {
+                0.0
+            } else {
+                f32::NAN
+            };
+        }
         let denominator = wo.dot(self.ng).abs() * wi.dot(self.frame.n).abs();
         if denominator <= 0.0 {
             return 0.0;
@@ -406,16 +419,17 @@ impl Bsdf {
         u_lobe: f32,
         mode: Transport,
     ) -> Option<BsdfSample> {
-        let wo_local = self.frame.to_local(wo);
+        // Not needed by the diffuse lobe, whose directions ignore `wo`.
+        let wo_local = || self.frame.to_local(wo);
         let (wi_local, weight, pdf, delta) = match self.kind {
             BsdfKind::Diffuse { albedo } => diffuse::sample(albedo, u)?,
-            BsdfKind::Mirror { reflectance } => mirror::sample(reflectance, wo_local),
+            BsdfKind::Mirror { reflectance } => mirror::sample(reflectance, wo_local()),
             BsdfKind::Dielectric { eta, transmittance } => {
-                dielectric::sample(eta, transmittance, wo_local, u_lobe, mode)?
+                dielectric::sample(eta, transmittance, wo_local(), u_lobe, mode)?
             }
-            BsdfKind::Conductor(ref c) => c.sample(wo_local, u)?,
-            BsdfKind::RoughDielectric(ref r) => r.sample(wo_local, u, u_lobe, mode)?,
-            BsdfKind::Plastic(ref p) => p.sample(wo_local, u, u_lobe)?,
+            BsdfKind::Conductor(ref c) => c.sample(wo_local(), u)?,
+            BsdfKind::RoughDielectric(ref r) => r.sample(wo_local(), u, u_lobe, mode)?,
+            BsdfKind::Plastic(ref p) => p.sample(wo_local(), u, u_lobe)?,
         };
         let wi = self.frame.to_world(wi_local);
         // Shading normals can send a "reflected" direction through the surface

@@ -101,6 +101,36 @@ fn diffuse_sampling_matches_pdf_with_tilted_shading_normal() {
     check_sampling_matches_pdf("diffuse, tilted shading normal", &bsdf, wo, 3);
 }
 
+/// The adjoint correction |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|) is exactly
+/// one under flat shading, on both faces and at every angle, so light paths
+/// scatter with the camera paths' weights there; with a tilted shading
+/// normal it is not, and the weights differ.
+#[test]
+fn flat_shading_has_no_adjoint_correction() {
+    let mut rng = Rng::new(5);
+    for (ng, ns, flat) in [
+        (Vec3::Z, Vec3::Z, true),
+        (Vec3::Z, Vec3::new(0.3, 0.0, 1.0).normalize(), false),
+    ] {
+        let at = surface(ng, ns);
+        let mut differ = 0;
+        for _ in 0..2000 {
+            let z = if rng.f32() < 0.5 { 1.0 } else { -1.0 };
+            let wo = Vec3::new(rng.f32() - 0.5, rng.f32() - 0.5, z * rng.f32()).normalize();
+            let bsdf = diffuse().bsdf(&at, wo);
+            let u = (rng.f32(), rng.f32());
+            let radiance = bsdf.sample(wo, u, 0.5, Transport::Radiance);
+            let importance = bsdf.sample(wo, u, 0.5, Transport::Importance);
+            match (radiance, importance) {
+                (Some(r), Some(i)) if flat => assert_eq!(r.weight, i.weight, "wo {wo}"),
+                (Some(r), Some(i)) => differ += (r.weight != i.weight) as u32,
+                (r, i) => assert_eq!(r.is_some(), i.is_some(), "wo {wo}"),
+            }
+        }
+        assert_eq!(differ > 1000, !flat, "{differ} of 2000 differ");
+    }
+}
+
 #[test]
 fn mirror_reflects_about_the_normal() {
     let m = Material::Mirror {
