@@ -22,6 +22,13 @@ pass). With more than one thread the rays are split into one contiguous
 range per thread, traced from Python threads (embreex releases the GIL
 around its loop).
 
+With `--rounds N`, the three libraries are measured N times in turn
+(tracer, Embree, obvhs, then again), tracer tracing the saved ray files
+after the first round, and each figure is the median over the rounds of
+each round's median of `--runs`: the machine's slow spells then fall on
+every library alike. The tables then also give the range of the
+per-round ratios to Embree.
+
 With `--spatial-splits FRACTION`, tracer also traces the saved rays
 through a second BVH built with spatial splits (`tracer bench
 --spatial-splits`), and the table gains its figures and ratio to Embree.
@@ -173,6 +180,50 @@ def tracer_bench_split(tracer, source, folder, threads, runs, budget):
     return report
 
 
+def tracer_rays(tracer, source, folder, threads, runs):
+    """tracer tracing the ray files an earlier round saved (a later round)."""
+    report = None
+    for name in SETS:
+        path = os.path.join(folder, f"{name}.rays")
+        if not os.path.exists(path):
+            continue
+        cmd = [tracer, "bench", source, "--json", "--runs", str(runs), "--rays-file", path,
+               "--threads", ",".join(map(str, threads))]
+        out = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
+        if report is None:
+            report = out
+        else:
+            report["traces"] += out["traces"]
+    return report
+
+
+def merge_rounds(rounds):
+    """One report from the same report made in several rounds: every figure
+    the median over the rounds, each trace keeping its rounds' figures."""
+    first = json.loads(json.dumps(rounds[0]))
+    key = lambda t: (t["rays"], t["query"], t["threads"])
+    by_key = [{key(t): t for t in r["traces"]} for r in rounds]
+    for t in first["traces"]:
+        values = [r[key(t)]["mrays_per_second"] for r in by_key if key(t) in r]
+        t["rounds"] = values
+        t["mrays_per_second"] = statistics.median(values)
+    if "builds" in first:
+        for i, b in enumerate(first["builds"]):
+            b["seconds"] = statistics.median(r["builds"][i]["seconds"] for r in rounds)
+    if "build_seconds" in first:
+        first["build_seconds"] = statistics.median(r["build_seconds"] for r in rounds)
+    return first
+
+
+def ratio_range(mine, theirs):
+    """min-max of the per-round ratios, when there were several rounds."""
+    a, b = mine.get("rounds"), theirs.get("rounds")
+    if not a or not b or len(a) < 2:
+        return None
+    ratios = [x / y for x, y in zip(a, b)]
+    return f"{min(ratios):.2f}-{max(ratios):.2f}"
+
+
 def table(ours, embree, obvhs, split=None):
     lines = ["| rays | query | threads | tracer Mrays/s | Embree Mrays/s | obvhs Mrays/s "
              "| tracer / Embree | tracer / obvhs | hits (tracer, Embree, obvhs) | distance sums |",
@@ -198,11 +249,14 @@ def table(ours, embree, obvhs, split=None):
         else:
             sums = "-"
         mine = t["mrays_per_second"]
+        spread = ratio_range(t, e)
         obvhs_cells = (f"{o['mrays_per_second']:.2f}", f"{mine / o['mrays_per_second']:.2f}") \
             if o else ("-", "-")
         row = (f"| {t['rays']} | {t['query']} | {t['threads']} | {mine:.2f} | "
                f"{e['mrays_per_second']:.2f} | {obvhs_cells[0]} | "
-               f"{mine / e['mrays_per_second']:.2f} | {obvhs_cells[1]} | {same} | {sums} |")
+               f"{mine / e['mrays_per_second']:.2f}"
+               + (f" ({spread})" if spread else "")
+               + f" | {obvhs_cells[1]} | {same} | {sums} |")
         if split:
             sp = splits.get(key)
             if sp:
@@ -241,6 +295,8 @@ def main(argv=None):
     ap.add_argument("inputs", nargs="+", help="OBJ meshes or scene files")
     ap.add_argument("--threads", default="1,2", help="thread counts, e.g. 1,2")
     ap.add_argument("--runs", type=int, default=5, help="timed runs per figure (median)")
+    ap.add_argument("--rounds", type=int, default=1,
+                    help="measure the libraries this many times in turn (median of rounds)")
     ap.add_argument("--out", default=os.path.join(ROOT, "target", "embree"))
     ap.add_argument("--tracer", default=os.path.join(ROOT, "target", "release", "tracer"))
     ap.add_argument("--obvhs", default=os.path.join(ROOT, "target", "release", "examples", "obvhs_rays"),
@@ -264,16 +320,30 @@ def main(argv=None):
     }
     md = [f"# tracer against Embree\n\n- date: {report['date']}\n- machine: {report['machine']}\n"
           f"- {report['tracer']}; embreex {report['embreex']} (Embree 4.4); obvhs {obvhs_version()} (CWBVH, fast_build)\n"
-          f"- medians of {args.runs} runs; Mrays/s = rays / seconds\n"
+          f"- medians of {args.runs} runs"
+          + (f", then the median of {args.rounds} rounds taken in turn (in brackets: the"
+             " range of the rounds' ratios to Embree)" if args.rounds > 1 else "")
+          + "; Mrays/s = rays / seconds\n"
           + (f"- spatial splits: reference budget {args.spatial_splits}\n"
              if args.spatial_splits is not None else "")]
     for source in args.inputs:
         name = os.path.splitext(os.path.basename(source))[0]
         folder = os.path.join(args.out, name)
         print(f"== {source}", flush=True)
-        ours = tracer_bench(args.tracer, source, folder, threads, args.runs)
-        embree = [run_worker(folder, t, args.runs) for t in threads]
-        obvhs = [] if args.no_obvhs else [run_obvhs(args.obvhs, folder, t, args.runs) for t in threads]
+        rounds = []
+        for r in range(max(1, args.rounds)):
+            if r == 0:
+                ours = tracer_bench(args.tracer, source, folder, threads, args.runs)
+            else:
+                print(f"   round {r + 1} of {args.rounds}", flush=True)
+                ours = tracer_rays(args.tracer, source, folder, threads, args.runs)
+            embree = [run_worker(folder, t, args.runs) for t in threads]
+            obvhs = [] if args.no_obvhs else [run_obvhs(args.obvhs, folder, t, args.runs)
+                                              for t in threads]
+            rounds.append((ours, embree, obvhs))
+        ours = merge_rounds([r[0] for r in rounds])
+        embree = [merge_rounds([r[1][i] for r in rounds]) for i in range(len(threads))]
+        obvhs = [merge_rounds([r[2][i] for r in rounds]) for i in range(len(rounds[0][2]))]
         split = None if args.spatial_splits is None else tracer_bench_split(
             args.tracer, source, folder, threads, args.runs, args.spatial_splits)
         report["inputs"].append({"input": source, "tracer": ours, "embree": embree, "obvhs": obvhs,
