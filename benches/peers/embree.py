@@ -163,38 +163,27 @@ def tracer_bench(tracer, source, folder, threads, runs):
     return json.loads(out.stdout)
 
 
+def tracer_rays(tracer, source, folder, threads, runs, extra=()):
+    """tracer tracing the ray files the first run saved, one call per set
+    (a later round, or with `extra` options such as spatial splits)."""
+    report = None
+    for name in SETS:
+        path = os.path.join(folder, f"{name}.rays")
+        if not os.path.exists(path):
+            continue
+        cmd = [tracer, "bench", source, "--json", "--runs", str(runs), "--rays-file", path,
+               "--threads", ",".join(map(str, threads)), *extra]
+        out = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
+        if report is None:
+            report = out
+        else:
+            report["traces"] += out["traces"]
+    return report
+
+
 def tracer_bench_split(tracer, source, folder, threads, runs, budget):
     """tracer with spatial splits, tracing the ray files the first run saved."""
-    report = None
-    for name in SETS:
-        path = os.path.join(folder, f"{name}.rays")
-        if not os.path.exists(path):
-            continue
-        cmd = [tracer, "bench", source, "--json", "--runs", str(runs), "--rays-file", path,
-               "--threads", ",".join(map(str, threads)), "--spatial-splits", str(budget)]
-        out = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
-        if report is None:
-            report = out
-        else:
-            report["traces"] += out["traces"]
-    return report
-
-
-def tracer_rays(tracer, source, folder, threads, runs):
-    """tracer tracing the ray files an earlier round saved (a later round)."""
-    report = None
-    for name in SETS:
-        path = os.path.join(folder, f"{name}.rays")
-        if not os.path.exists(path):
-            continue
-        cmd = [tracer, "bench", source, "--json", "--runs", str(runs), "--rays-file", path,
-               "--threads", ",".join(map(str, threads))]
-        out = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
-        if report is None:
-            report = out
-        else:
-            report["traces"] += out["traces"]
-    return report
+    return tracer_rays(tracer, source, folder, threads, runs, ["--spatial-splits", str(budget)])
 
 
 def merge_rounds(rounds):
