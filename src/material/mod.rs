@@ -390,8 +390,9 @@ impl Bsdf {
     /// |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|): one unless the normals differ.
     fn shading_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
         // Flat shading: numerator and denominator are the same product d,
-        // so the general form below gives one, zero where d is zero, NaN
-        // where d is; two dot products and a division fewer.
+        // so the general form below gives one, or zero where d is zero, or
+        // NaN where d is NaN; this says so without its two dot products
+        // and its division.
         if self.frame.n == self.ng {
             let d = wo.dot(self.ng).abs() * wi.dot(self.ng).abs();
             return if d > 0.0 {
