@@ -111,10 +111,7 @@ pub(super) fn build_tree(
 }
 
 fn aabb_of(p: &Prim) -> Aabb {
-    Aabb {
-        min: p.min.truncate(),
-        max: p.max.truncate(),
-    }
+    p.aabb()
 }
 
 fn intersection(a: Aabb, b: Aabb) -> Aabb {
@@ -300,7 +297,7 @@ impl Builder<'_> {
         let binner = Binner::new(range.centroids, bins);
         let (axis, bin) = (object.axis, object.bin);
         let (mid, left_centroids, right_centroids) =
-            partition(&mut prims, |p| binner.below(p.centroid2(), axis, bin));
+            partition(&mut prims, |p| binner.below(p.centroid2_lanes(), axis, bin));
         if mid == 0 || mid == count {
             let (mid, left, right) = median_split(&mut prims, range);
             return object_children(prims, mid, left, right, depth, budget);
