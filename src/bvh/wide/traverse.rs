@@ -133,9 +133,15 @@ pub(super) fn exact_edges<const N: usize>(
 pub(super) struct RayLanes {
     origin: [f32x8; 3],
     inv_dir: [f32x8; 3],
+    /// `inv_dir` stretched by `EXIT_STRETCH`, for the exit distances: the
+    /// stretch then costs no multiplication on the path from a node's
+    /// load to the choice of the next node.
+    inv_dir_exit: [f32x8; 3],
     /// Per axis, which row of `WideNode::bounds` holds the near plane (the
-    /// minimum for a positive direction, the maximum for a negative one).
+    /// minimum for a positive direction, the maximum for a negative one),
+    /// and which the far one.
     near_row: [usize; 3],
+    far_row: [usize; 3],
     tmin: f32,
     /// The watertight test's axes: `kx`, `ky`, then the dominant `kz`
     /// (see `RayShear`).
@@ -152,10 +158,13 @@ impl RayLanes {
         let o = ray.origin.to_array();
         let inv = safe_inverses(d);
         let (k, s) = RayShear::new(ray.origin, ray.dir).parts();
+        let near_row = [0, 1, 2].map(|a| if inv[a] >= 0.0 { a } else { a + 3 });
         RayLanes {
             origin: o.map(f32x8::splat),
             inv_dir: inv.map(f32x8::splat),
-            near_row: [0, 1, 2].map(|a| if inv[a] >= 0.0 { a } else { a + 3 }),
+            inv_dir_exit: inv.map(|i| f32x8::splat(i * EXIT_STRETCH)),
+            near_row,
+            far_row: near_row.map(|row| (row + 3) % 6),
             tmin: ray.tmin,
             k,
             origin_k: k.map(|axis| f32x8::splat(o[axis])),
@@ -165,18 +174,29 @@ impl RayLanes {
 
     /// Entry distances into the node's child boxes, and a bit mask of those
     /// the ray enters before `tmax`.
+    ///
+    /// The exit distances are stretched (see `EXIT_STRETCH`) through
+    /// `inv_dir_exit`, and the three axes' distances are combined as a tree
+    /// (two maxima, then one), not a chain: both shorten the dependency
+    /// chain from loading a node to knowing which child comes next. The
+    /// minima and maxima are exact and no distance is NaN (the inverses are
+    /// finite and non-zero), so the order of combining changes nothing.
     #[inline(always)]
     fn enter(&self, node: &WideNode, tmax: f32) -> (f32x8, u32) {
-        let mut near = f32x8::splat(self.tmin);
-        let mut far = f32x8::splat(tmax);
-        for axis in 0..3 {
-            let near_plane = f32x8::new(node.bounds[self.near_row[axis]]);
-            let far_plane = f32x8::new(node.bounds[(self.near_row[axis] + 3) % 6]);
-            near = near.fast_max((near_plane - self.origin[axis]) * self.inv_dir[axis]);
-            far = far.fast_min((far_plane - self.origin[axis]) * self.inv_dir[axis]);
-        }
-        let mask = near.simd_le(far * f32x8::splat(EXIT_STRETCH)).to_bitmask();
-        (near, mask)
+        let entry = |axis: usize| {
+            (f32x8::new(node.bounds[self.near_row[axis]]) - self.origin[axis]) * self.inv_dir[axis]
+        };
+        let exit = |axis: usize| {
+            (f32x8::new(node.bounds[self.far_row[axis]]) - self.origin[axis])
+                * self.inv_dir_exit[axis]
+        };
+        let near = entry(0)
+            .fast_max(entry(1))
+            .fast_max(entry(2).fast_max(f32x8::splat(self.tmin)));
+        let far = exit(0)
+            .fast_min(exit(1))
+            .fast_min(exit(2).fast_min(f32x8::splat(tmax * EXIT_STRETCH)));
+        (near, near.simd_le(far).to_bitmask())
     }
 
     /// The watertight test on two blocks at once, in the eight lanes of one
@@ -334,7 +354,29 @@ impl WideBvh {
                 let node = &self.nodes[current as usize];
                 let (near, mut mask) = lanes.enter(node, tmax);
                 let near = near.to_array();
-                // The entered children, nearest first (insertion sort).
+                // One or two entered children (most visits) are handled
+                // without the sort below, so the next node's address is
+                // known a few steps sooner; the order is the sort's.
+                if mask != 0 {
+                    let a = mask.trailing_zeros() as usize;
+                    let rest = mask & (mask - 1);
+                    if rest == 0 {
+                        current = node.children[a];
+                        continue;
+                    }
+                    if rest & (rest - 1) == 0 {
+                        let b = rest.trailing_zeros() as usize;
+                        let (first, second) = if near[b] < near[a] { (b, a) } else { (a, b) };
+                        let deferred = (node.children[second], near[second]);
+                        if PREFETCH {
+                            self.prefetch_reference(deferred.0);
+                        }
+                        stack.push(deferred);
+                        current = node.children[first];
+                        continue;
+                    }
+                }
+                // Three or more, nearest first (insertion sort).
                 let mut order = [(0u32, 0f32); WIDTH];
                 let mut count = 0;
                 while mask != 0 {
