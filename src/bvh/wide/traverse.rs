@@ -60,6 +60,21 @@ impl<T: Copy> Stack<T> {
         (self.top > 0).then(|| unsafe { self.entries[self.top - 1].assume_init() })
     }
 
+    /// How many entries the stack holds.
+    #[inline(always)]
+    pub(super) fn len(&self) -> usize {
+        self.top
+    }
+
+    /// The entries from `base` up to the top.
+    #[inline(always)]
+    pub(super) fn above(&self, base: usize) -> &[T] {
+        let entries = &self.entries[base.min(self.top)..self.top];
+        // SAFETY: every entry below `top` was written by `push`, and
+        // `MaybeUninit<T>` has the layout of `T`.
+        unsafe { std::slice::from_raw_parts(entries.as_ptr().cast(), entries.len()) }
+    }
+
     #[inline(always)]
     pub(super) fn pop(&mut self) -> Option<T> {
         if self.top == 0 {
@@ -68,6 +83,29 @@ impl<T: Copy> Stack<T> {
         self.top -= 1;
         // SAFETY: every entry below `top` was written by `push`.
         Some(unsafe { self.entries[self.top].assume_init() })
+    }
+}
+
+impl Stack<(u32, f32)> {
+    /// Pushes `entry` (a child and its entry distance) among the entries
+    /// above `base`, which stay ordered with the nearest on top; of equal
+    /// distances, the one pushed first stays above, as a stable sort by
+    /// distance would leave them.
+    #[inline(always)]
+    pub(super) fn push_ordered(&mut self, base: usize, entry: (u32, f32)) {
+        let mut k = self.top;
+        while k > base {
+            // SAFETY: every entry below `top` was written by `push`.
+            let below = unsafe { self.entries[k - 1].assume_init() };
+            if below.1 >= entry.1 {
+                break;
+            }
+            // Bounds-checked, as in `push`.
+            self.entries[k].write(below);
+            k -= 1;
+        }
+        self.entries[k].write(entry);
+        self.top += 1;
     }
 }
 
@@ -376,30 +414,24 @@ impl WideBvh {
                         continue;
                     }
                 }
-                // Three or more, nearest first (insertion sort).
-                let mut order = [(0u32, 0f32); WIDTH];
-                let mut count = 0;
-                while mask != 0 {
-                    let lane = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let entry = (node.children[lane], near[lane]);
-                    let mut k = count;
-                    while k > 0 && order[k - 1].1 > entry.1 {
-                        order[k] = order[k - 1];
-                        k -= 1;
+                // Three or more: sorted straight onto the stack, nearest
+                // on top, then the nearest taken off as the next node.
+                if mask != 0 {
+                    let base = stack.len();
+                    while mask != 0 {
+                        let lane = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack.push_ordered(base, (node.children[lane], near[lane]));
                     }
-                    order[k] = entry;
-                    count += 1;
-                }
-                if count > 0 {
-                    for &entry in order[1..count].iter().rev() {
+                    if let Some((child, _)) = stack.pop() {
                         if PREFETCH {
-                            self.prefetch_reference(entry.0);
+                            for &(deferred, _) in stack.above(base) {
+                                self.prefetch_reference(deferred);
+                            }
                         }
-                        stack.push(entry);
+                        current = child;
+                        continue;
                     }
-                    current = order[0].0;
-                    continue;
                 }
             } else {
                 let (block, count) = leaf(current);
