@@ -18,7 +18,7 @@
 
 use super::{
     find_split, half_area, join_subtrees, measure, median_split, partition, split_cost, Binner,
-    Box4, BuildOptions, Prim, Range, MAX_BINS, MAX_SAH_DEPTH, PARALLEL_MIN, UNSET,
+    PackedBox, BuildOptions, Prim, Range, MAX_BINS, MAX_SAH_DEPTH, PARALLEL_MIN, UNSET,
 };
 use crate::bvh::Node;
 use crate::geometry::{Aabb, Triangle};
@@ -60,13 +60,13 @@ enum Outcome {
 /// lie in its slab, and how many references start and end in it.
 #[derive(Clone, Copy)]
 struct SpatialBin {
-    bounds: Box4,
+    bounds: PackedBox,
     entries: u32,
     exits: u32,
 }
 
 const EMPTY_SPATIAL_BIN: SpatialBin = SpatialBin {
-    bounds: Box4::EMPTY,
+    bounds: PackedBox::EMPTY,
     entries: 0,
     exits: 0,
 };
@@ -390,7 +390,7 @@ impl Builder<'_> {
                     let hi = at(k + 1);
                     let part = slices.piece(lo, hi, b);
                     if !part.is_empty() {
-                        bin.bounds = bin.bounds.union(Box4::of(part));
+                        bin.bounds = bin.bounds.union(PackedBox::of(part));
                     }
                     lo = hi;
                 }
@@ -471,11 +471,11 @@ impl Builder<'_> {
 #[inline(always)]
 fn sweep(
     bins: usize,
-    bin: impl Fn(usize) -> (Box4, u32, u32),
+    bin: impl Fn(usize) -> (PackedBox, u32, u32),
     parent_area: f32,
 ) -> Option<(usize, f32, Aabb)> {
     let mut right = [(0f32, 0u32); MAX_BINS];
-    let (mut acc, mut n) = (Box4::EMPTY, 0);
+    let (mut acc, mut n) = (PackedBox::EMPTY, 0);
     for k in (1..bins).rev() {
         let (bounds, _, count) = bin(k);
         acc = acc.union(bounds);
@@ -483,7 +483,7 @@ fn sweep(
         right[k] = (acc.half_area(), n);
     }
     let mut best: Option<(usize, f32, Aabb)> = None;
-    let (mut acc, mut n) = (Box4::EMPTY, 0);
+    let (mut acc, mut n) = (PackedBox::EMPTY, 0);
     for (k, &(right_area, right_count)) in right.iter().enumerate().take(bins).skip(1) {
         let (bounds, count, _) = bin(k - 1);
         acc = acc.union(bounds);
