@@ -18,7 +18,7 @@
 
 use super::{
     find_split, half_area, join_subtrees, measure, median_split, partition, split_cost, Binner,
-    PackedBox, BuildOptions, Prim, Range, MAX_BINS, MAX_SAH_DEPTH, PARALLEL_MIN, UNSET,
+    BuildOptions, PackedBox, Prim, Range, MAX_BINS, MAX_SAH_DEPTH, PARALLEL_MIN, UNSET,
 };
 use crate::bvh::Node;
 use crate::geometry::{Aabb, Triangle};
