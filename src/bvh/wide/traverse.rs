@@ -392,7 +392,7 @@ impl WideBvh {
                 let node = &self.nodes[current as usize];
                 let (near, mut mask) = lanes.enter(node, tmax);
                 let near = near.to_array();
-                // One or two entered children (most visits) are handled
+                // One or two entered children are handled
                 // without the sort below, so the next node's address is
                 // known a few steps sooner; the order is the sort's.
                 if mask != 0 {
@@ -413,10 +413,9 @@ impl WideBvh {
                         current = node.children[first];
                         continue;
                     }
-                }
-                // Three or more: sorted straight onto the stack, nearest
-                // on top, then the nearest taken off as the next node.
-                if mask != 0 {
+                    // Three or more: sorted straight onto the stack,
+                    // nearest on top, then the nearest taken off as the
+                    // next node.
                     let base = stack.len();
                     while mask != 0 {
                         let lane = mask.trailing_zeros() as usize;
