@@ -13,7 +13,7 @@
 //! lose, even in the Cornell box's three-node tree, where eight of them
 //! visit nearly every leaf (docs/benchmarks.md, "Ray packets").
 
-use super::traverse::{leaf, safe_inverse, watertight_lanes, Stack, EXIT_STRETCH};
+use super::traverse::{leaf, safe_inverse, stack_storage, watertight_lanes, Stack, EXIT_STRETCH};
 use super::{TriangleBlock, WideBvh, EMPTY_CHILD, LEAF_BIT, WIDTH};
 use crate::bvh::Hit;
 use crate::geometry::triangle::RayShear;
@@ -162,7 +162,8 @@ impl WideBvh {
         let mut tmax = lanes.tmax;
         let mut triangle = u32x8::splat(u32::MAX);
         let (mut b1, mut b2) = (f32x8::ZERO, f32x8::ZERO);
-        let mut stack = Stack::<(u32, u32, f32)>::new();
+        let mut storage = stack_storage();
+        let mut stack = Stack::<(u32, u32, f32)>::new(&mut storage);
         let mut current = (self.root, active);
         while current.1 != 0 {
             let (reference, mask) = current;
@@ -255,7 +256,8 @@ impl WideBvh {
         let real = (1u32 << rays.len()) - 1;
         let mut open = lanes.enter_root(&self.bounds) & real;
         let mut blocked = 0u32;
-        let mut stack = Stack::<(u32, u32)>::new();
+        let mut storage = stack_storage();
+        let mut stack = Stack::<(u32, u32)>::new(&mut storage);
         let mut current = (self.root, open);
         loop {
             let (reference, mask) = current;

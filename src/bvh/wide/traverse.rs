@@ -30,20 +30,29 @@ pub(super) fn leaf(reference: u32) -> (usize, u32) {
 pub(super) const MAX_DEPTH: usize = 96;
 const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH + 4;
 
-/// The traversal stack, left uninitialised: zeroing two kilobytes on every
-/// ray cost more than the traversal itself in small scenes.
-pub(super) struct Stack<T: Copy> {
-    entries: [MaybeUninit<T>; STACK_SIZE],
+/// Room for a traversal stack, left uninitialised: zeroing two kilobytes
+/// on every ray cost more than the traversal itself in small scenes.
+pub(super) type StackStorage<T> = [MaybeUninit<T>; STACK_SIZE];
+
+/// Uninitialised room for a [`Stack`].
+#[inline(always)]
+pub(super) fn stack_storage<T: Copy>() -> StackStorage<T> {
+    [const { MaybeUninit::uninit() }; STACK_SIZE]
+}
+
+/// The traversal stack. Its entries live in storage of their own, apart
+/// from `top`: when both shared one struct, the compiler could not tell a
+/// write to an entry from a write to `top`, so it kept `top` in memory and
+/// every push and pop went through a store and a reload.
+pub(super) struct Stack<'a, T: Copy> {
+    entries: &'a mut StackStorage<T>,
     top: usize,
 }
 
-impl<T: Copy> Stack<T> {
+impl<'a, T: Copy> Stack<'a, T> {
     #[inline(always)]
-    pub(super) fn new() -> Self {
-        Stack {
-            entries: [const { MaybeUninit::uninit() }; STACK_SIZE],
-            top: 0,
-        }
+    pub(super) fn new(entries: &'a mut StackStorage<T>) -> Self {
+        Stack { entries, top: 0 }
     }
 
     #[inline(always)]
@@ -86,7 +95,7 @@ impl<T: Copy> Stack<T> {
     }
 }
 
-impl Stack<(u32, f32)> {
+impl Stack<'_, (u32, f32)> {
     /// Pushes `entry` (a child and its entry distance) among the entries
     /// above `base`, which stay ordered with the nearest on top; of equal
     /// distances, the one pushed first stays above, as a stable sort by
@@ -289,8 +298,9 @@ impl RayLanes {
 /// unscaled z): the edge functions, decided in double precision where single
 /// precision gives an exact zero in a lane of `lanes`, then a mask of the
 /// lanes hit within (`tmin`, `tmax`), their distances, and the barycentrics
-/// of vertices 1 and 2. Shared by the single-ray test (eight triangles,
-/// one ray) and the packet test (one triangle, eight rays).
+/// of vertices 1 and 2 (only the hit lanes' are meaningful). Shared by the
+/// single-ray test (eight triangles, one ray) and the packet test (one
+/// triangle, eight rays).
 #[inline(always)]
 pub(super) fn watertight_lanes(
     vertices: [(f32x8, f32x8, f32x8); 3],
@@ -310,14 +320,23 @@ pub(super) fn watertight_lanes(
         let [ua, va, wa] = exact_edges(on_edge, xy, [u, v, w].map(|c| c.to_array()));
         (u, v, w) = (f32x8::new(ua), f32x8::new(va), f32x8::new(wa));
     }
-    let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
-        & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
+    // A lane is inside when its edge functions share a sign (zeros count
+    // with either): their minimum is not negative or their maximum not
+    // positive. A NaN edge function makes the determinant NaN, which no
+    // distance test below passes, whatever this says of it.
+    let lowest = u.fast_min(v).fast_min(w);
+    let highest = u.fast_max(v).fast_max(w);
     let det = u + v + w;
+    // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
+    let candidates = (lowest.simd_ge(zero) | highest.simd_le(zero)) & det.simd_ne(zero);
+    // Most tests miss every triangle: they skip the division.
+    if candidates.to_bitmask() & lanes == 0 {
+        return (zero, zero, zero, zero);
+    }
     let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
     let inv_det = f32x8::ONE / det;
     let t = t_scaled * inv_det;
-    // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
-    let hit = !outside & det.simd_ne(zero) & t.simd_gt(tmin) & t.simd_lt(tmax);
+    let hit = candidates & t.simd_gt(tmin) & t.simd_lt(tmax);
     (hit, t, v * inv_det, w * inv_det)
 }
 
@@ -385,7 +404,8 @@ impl WideBvh {
         let lanes = RayLanes::new(ray);
         let mut tmax = ray.tmax;
         let mut closest: Option<(u32, usize, f32, f32)> = None;
-        let mut stack = Stack::<(u32, f32)>::new();
+        let mut storage = stack_storage();
+        let mut stack = Stack::<(u32, f32)>::new(&mut storage);
         let mut current = self.root;
         loop {
             if current & LEAF_BIT == 0 {
@@ -486,7 +506,8 @@ impl WideBvh {
         }
         // No test of the root's own box first (see `intersect`).
         let lanes = RayLanes::new(ray);
-        let mut stack = Stack::<u32>::new();
+        let mut storage = stack_storage();
+        let mut stack = Stack::<u32>::new(&mut storage);
         let mut current = self.root;
         loop {
             if current & LEAF_BIT == 0 {
