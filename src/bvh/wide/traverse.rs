@@ -179,11 +179,17 @@ pub(super) fn exact_edges<const N: usize>(
 /// registers rather than on the stack.
 pub(super) struct RayLanes {
     origin: [f32x8; 3],
-    inv_dir: [f32x8; 3],
-    /// `inv_dir` stretched by `EXIT_STRETCH`, for the exit distances: the
-    /// stretch then costs no multiplication on the path from a node's
+    /// The direction's inverses, negated: the slab distance (plane −
+    /// origin) × inverse is computed as (origin − plane) × −inverse, the
+    /// same number bit for bit (negation is exact, and subtraction and
+    /// multiplication round symmetrically), so that the plane, the operand
+    /// read from the node, comes second, where the instruction can take it
+    /// straight from memory: one load fewer per slab, six per node.
+    neg_inv_dir: [f32x8; 3],
+    /// `neg_inv_dir` stretched by `EXIT_STRETCH`, for the exit distances:
+    /// the stretch then costs no multiplication on the path from a node's
     /// load to the choice of the next node.
-    inv_dir_exit: [f32x8; 3],
+    neg_inv_dir_exit: [f32x8; 3],
     /// Per axis, which row of `WideNode::bounds` holds the near plane (the
     /// minimum for a positive direction, the maximum for a negative one),
     /// and which the far one.
@@ -208,8 +214,8 @@ impl RayLanes {
         let near_row = [0, 1, 2].map(|a| if inv[a] >= 0.0 { a } else { a + 3 });
         RayLanes {
             origin: o.map(f32x8::splat),
-            inv_dir: inv.map(f32x8::splat),
-            inv_dir_exit: inv.map(|i| f32x8::splat(i * EXIT_STRETCH)),
+            neg_inv_dir: inv.map(|i| f32x8::splat(-i)),
+            neg_inv_dir_exit: inv.map(|i| f32x8::splat(-(i * EXIT_STRETCH))),
             near_row,
             far_row: near_row.map(|row| (row + 3) % 6),
             tmin: ray.tmin,
@@ -223,7 +229,7 @@ impl RayLanes {
     /// the ray enters before `tmax`.
     ///
     /// The exit distances are stretched (see `EXIT_STRETCH`) through
-    /// `inv_dir_exit`, and the three axes' distances are combined as a tree
+    /// `neg_inv_dir_exit`, and the three axes' distances are combined as a tree
     /// (two maxima, then one), not a chain: both shorten the dependency
     /// chain from loading a node to knowing which child comes next. The
     /// minima and maxima are exact and no distance is NaN (the inverses are
@@ -231,11 +237,12 @@ impl RayLanes {
     #[inline(always)]
     fn enter(&self, node: &WideNode, tmax: f32) -> (f32x8, u32) {
         let entry = |axis: usize| {
-            (f32x8::new(node.bounds[self.near_row[axis]]) - self.origin[axis]) * self.inv_dir[axis]
+            (self.origin[axis] - f32x8::new(node.bounds[self.near_row[axis]]))
+                * self.neg_inv_dir[axis]
         };
         let exit = |axis: usize| {
-            (f32x8::new(node.bounds[self.far_row[axis]]) - self.origin[axis])
-                * self.inv_dir_exit[axis]
+            (self.origin[axis] - f32x8::new(node.bounds[self.far_row[axis]]))
+                * self.neg_inv_dir_exit[axis]
         };
         let near = entry(0)
             .fast_max(entry(1))
