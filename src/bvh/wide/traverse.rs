@@ -305,9 +305,8 @@ impl RayLanes {
 /// unscaled z): the edge functions, decided in double precision where single
 /// precision gives an exact zero in a lane of `lanes`, then a mask of the
 /// lanes hit within (`tmin`, `tmax`), their distances, and the barycentrics
-/// of vertices 1 and 2 (only the hit lanes' are meaningful). Shared by the
-/// single-ray test (eight triangles, one ray) and the packet test (one
-/// triangle, eight rays).
+/// of vertices 1 and 2. Shared by the single-ray test (eight triangles,
+/// one ray) and the packet test (one triangle, eight rays).
 #[inline(always)]
 pub(super) fn watertight_lanes(
     vertices: [(f32x8, f32x8, f32x8); 3],
@@ -327,23 +326,14 @@ pub(super) fn watertight_lanes(
         let [ua, va, wa] = exact_edges(on_edge, xy, [u, v, w].map(|c| c.to_array()));
         (u, v, w) = (f32x8::new(ua), f32x8::new(va), f32x8::new(wa));
     }
-    // A lane is inside when its edge functions share a sign (zeros count
-    // with either): their minimum is not negative or their maximum not
-    // positive. A NaN edge function makes the determinant NaN, which no
-    // distance test below passes, whatever this says of it.
-    let lowest = u.fast_min(v).fast_min(w);
-    let highest = u.fast_max(v).fast_max(w);
+    let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
+        & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
     let det = u + v + w;
-    // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
-    let candidates = (lowest.simd_ge(zero) | highest.simd_le(zero)) & det.simd_ne(zero);
-    // Most tests miss every triangle: they skip the division.
-    if candidates.to_bitmask() & lanes == 0 {
-        return (zero, zero, zero, zero);
-    }
     let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
     let inv_det = f32x8::ONE / det;
     let t = t_scaled * inv_det;
-    let hit = candidates & t.simd_gt(tmin) & t.simd_lt(tmax);
+    // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
+    let hit = !outside & det.simd_ne(zero) & t.simd_gt(tmin) & t.simd_lt(tmax);
     (hit, t, v * inv_det, w * inv_det)
 }
 
