@@ -181,10 +181,11 @@ pub(super) struct RayLanes {
     origin: [f32x8; 3],
     /// The direction's inverses, negated: the slab distance (plane −
     /// origin) × inverse is computed as (origin − plane) × −inverse, the
-    /// same number bit for bit (negation is exact, and subtraction and
-    /// multiplication round symmetrically), so that the plane, the operand
-    /// read from the node, comes second, where the instruction can take it
-    /// straight from memory: one load fewer per slab, six per node.
+    /// same value (negation is exact, and subtraction and multiplication
+    /// round symmetrically; only a zero may change sign, which no
+    /// comparison sees), so that the plane, the operand read from the
+    /// node, comes second, where the instruction can take it straight from
+    /// memory: one load fewer per slab, six per node.
     neg_inv_dir: [f32x8; 3],
     /// `neg_inv_dir` stretched by `EXIT_STRETCH`, for the exit distances:
     /// the stretch then costs no multiplication on the path from a node's
