@@ -51,6 +51,10 @@ impl Default for BuildOptions {
 
 const MAX_BINS: usize = 16;
 
+/// Ranges of at least this many prims are binned as two sets (see
+/// `Bins::of`); below it, clearing the second set costs more than it saves.
+const TWO_BIN_SETS_MIN: usize = 64;
+
 /// Below this many triangles a subtree is built on the calling thread: the
 /// fork costs more than it saves, and big subtrees already keep every thread busy.
 const PARALLEL_MIN: usize = 16 * 1024;
@@ -199,15 +203,42 @@ impl Bins {
     #[inline(always)]
     fn add(&mut self, binner: &Binner, prims: &[Prim]) {
         for p in prims {
-            let b = binner.bins_of(p.centroid2_lanes());
-            for ((bounds, counts), &k) in self.bounds.iter_mut().zip(&mut self.counts).zip(&b) {
-                // `bins_of` is already below MAX_BINS; the mask says so to
-                // the compiler, which then drops the bounds check.
-                let k = k & (MAX_BINS - 1);
-                bounds[k].grow(p);
-                counts[k] += 1;
-            }
+            self.add_one(binner, p);
         }
+    }
+
+    #[inline(always)]
+    fn add_one(&mut self, binner: &Binner, p: &Prim) {
+        let b = binner.bins_of(p.centroid2_lanes());
+        for ((bounds, counts), &k) in self.bounds.iter_mut().zip(&mut self.counts).zip(&b) {
+            // `bins_of` is already below MAX_BINS; the mask says so to
+            // the compiler, which then drops the bounds check.
+            let k = k & (MAX_BINS - 1);
+            bounds[k].grow(p);
+            counts[k] += 1;
+        }
+    }
+
+    /// The bins of `prims`, filled as two sets that take alternate prims
+    /// and are added up at the end. Neighbouring prims lie close together
+    /// (a mesh's triangles, and every range after a partition), so they
+    /// mostly fall in the same bins; with one set, each update of a bin
+    /// waits for the previous one's store, a chain through memory. Two sets
+    /// make two chains, each half as long, that the core runs side by side.
+    fn of(binner: &Binner, prims: &[Prim]) -> Bins {
+        let mut even = Bins::EMPTY;
+        if prims.len() < TWO_BIN_SETS_MIN {
+            even.add(binner, prims);
+            return even;
+        }
+        let mut odd = Bins::EMPTY;
+        let (pairs, rest) = prims.as_chunks::<2>();
+        for [a, b] in pairs {
+            even.add_one(binner, a);
+            odd.add_one(binner, b);
+        }
+        even.add(binner, rest);
+        even.merge(&odd)
     }
 
     fn merge(mut self, other: &Bins) -> Bins {
@@ -418,16 +449,10 @@ fn find_split(prims: &[Prim], range: Range, bins: usize, parallel: bool) -> Spli
     let binned = if parallel && prims.len() >= 4 * PARALLEL_MIN {
         prims
             .par_chunks(PARALLEL_MIN)
-            .map(|chunk| {
-                let mut binned = Bins::EMPTY;
-                binned.add(&binner, chunk);
-                binned
-            })
+            .map(|chunk| Bins::of(&binner, chunk))
             .reduce(|| Bins::EMPTY, |a, b| a.merge(&b))
     } else {
-        let mut binned = Bins::EMPTY;
-        binned.add(&binner, prims);
-        binned
+        Bins::of(&binner, prims)
     };
     let parent_area = half_area(range.bounds).max(f32::MIN_POSITIVE);
     let mut best = Split {
@@ -565,19 +590,26 @@ fn half_area(b: Aabb) -> f32 {
 /// prim takes is a coin toss to the branch predictor, and its misses had
 /// been a third of the build's.
 fn partition(prims: &mut [Prim], goes_left: impl Fn(&Prim) -> bool) -> (usize, Aabb, Aabb) {
-    // The sides' centroid bounds, right then left, as boxes.
-    let mut sides = [PackedBox::EMPTY; 2];
+    // The sides' centroid bounds, grown in registers: each side takes the
+    // centroid or, on the other side, an empty box. Indexing an array of the
+    // two by the side kept them in memory, so that each prim's update waited
+    // on the previous one's store.
+    let (mut left_box, mut right_box) = (PackedBox::EMPTY.lanes, PackedBox::EMPTY.lanes);
+    let empty = PackedBox::EMPTY.lanes;
     let mut left_count = 0;
     for i in 0..prims.len() {
         let prim = prims[i];
         let left = goes_left(&prim);
-        let side = &mut sides[left as usize];
-        *side = side.union(prim.centroid2_box());
+        let centroid = prim.centroid2_box().lanes;
+        let mask = f32x8::splat(f32::from_bits(0u32.wrapping_sub(left as u32)));
+        left_box = left_box.fast_min(mask.select(centroid, empty));
+        right_box = right_box.fast_min(mask.select(empty, centroid));
         prims[i] = prims[left_count];
         prims[left_count] = prim;
         left_count += left as usize;
     }
-    (left_count, sides[1].aabb(), sides[0].aabb())
+    let aabb = |lanes| PackedBox { lanes }.aabb();
+    (left_count, aabb(left_box), aabb(right_box))
 }
 
 /// Splits at the median centroid along the widest centroid axis (by index
