@@ -743,7 +743,8 @@ mod tests {
     fn least_by_enumeration(c: &Collapser, node: usize, lanes: usize) -> f32 {
         fn cuts(c: &Collapser, node: usize, limit: usize) -> Vec<Vec<usize>> {
             let mut all = vec![vec![node]];
-            if c.openable(node) {
+            // Opening a node takes at least two lanes.
+            if limit >= 2 && c.openable(node) {
                 let first = c.binary[node].first as usize;
                 for a in cuts(c, first, limit - 1) {
                     for b in cuts(c, first + 1, limit - a.len()) {
