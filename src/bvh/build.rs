@@ -53,9 +53,11 @@ const MAX_BINS: usize = 16;
 
 /// Ranges of at least this many prims are binned as two sets (see
 /// `Bins::of`). Below it, clearing and adding up the second set (1.7 KB)
-/// outweighs the few updates it overlaps. One-thread builds with 16, 64
-/// and 256 came within 3% of each other on the dragon, bunny and Sponza;
-/// 16 counted 1.7% more instructions (perf gate's `bvh-build`) than 64.
+/// outweighs the few updates it overlaps. One-thread builds (`tracer
+/// bench`, medians of rounds in turn) with 16, 64 and 256: dragon 0.380,
+/// 0.387 and 0.393 s, bunny 0.025, 0.025 and 0.026 s, Sponza 0.022, 0.023
+/// and 0.024 s, differences inside the spread between rounds of one
+/// binary; 16 counts 1.7% more instructions than 64 (perf gate's `bvh-build`).
 const TWO_BIN_SETS_MIN: usize = 64;
 
 /// Below this many triangles a subtree is built on the calling thread: the
@@ -597,8 +599,8 @@ fn partition(prims: &mut [Prim], goes_left: impl Fn(&Prim) -> bool) -> (usize, A
     // centroid or, on the other side, an empty box. Indexing an array of the
     // two by the side kept them in memory, so that each prim's update waited
     // on the previous one's store.
-    let (mut left_box, mut right_box) = (PackedBox::EMPTY.lanes, PackedBox::EMPTY.lanes);
     let empty = PackedBox::EMPTY.lanes;
+    let (mut left_box, mut right_box) = (empty, empty);
     let mut left_count = 0;
     for i in 0..prims.len() {
         let prim = prims[i];
