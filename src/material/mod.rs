@@ -199,6 +199,8 @@ impl Material {
     }
 
     /// The BSDF for light leaving `surface` towards `wo` (a unit vector).
+    // Inlined: see `Light::sample_incident`.
+    #[inline(always)]
     pub fn bsdf(&self, surface: &SurfacePoint, wo: Vec3) -> Bsdf {
         let outside = wo.dot(surface.geometric_normal) >= 0.0;
         let ng = if outside {
@@ -413,6 +415,8 @@ impl Bsdf {
     /// Samples an incident direction; `u` picks the direction, `u_lobe` the lobe.
     /// On light paths (`Transport::Importance`) the weight includes the
     /// shading-normal correction of [`Bsdf::eval_mode`].
+    // Inlined: see `Light::sample_incident`.
+    #[inline(always)]
     pub fn sample(
         &self,
         wo: Vec3,

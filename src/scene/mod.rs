@@ -134,6 +134,8 @@ impl Scene {
     }
 
     /// Position, normals and UV at a hit.
+    // Inlined: see `Light::sample_incident`.
+    #[inline(always)]
     pub fn surface(&self, hit: &Hit) -> SurfacePoint {
         let i = hit.triangle as usize;
         let tri = &self.triangles[i];
