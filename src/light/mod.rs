@@ -90,8 +90,10 @@ impl Light {
     // Inlined, as are `Material::bsdf`, `Bsdf::sample` and `Scene::surface`:
     // called once per path vertex, each returned its result through memory
     // and paid a call's register saves; inlined, renders take 2-3% fewer
-    // instructions and 3-7% less time (docs/benchmarks.md, "Four calls
-    // inlined"). Inlining more (the sampler, `Walk::scatter`) was slower.
+    // instructions, and the Cornell box renders 1.03-1.05x (pt) to
+    // 1.06-1.08x (lt, bdpt) the samples per second (docs/benchmarks.md,
+    // "Four calls inlined"). Inlining more (the sampler, `Walk::scatter`)
+    // was no faster, or slower.
     #[inline(always)]
     pub fn sample_incident(&self, receiver: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
         match self {
