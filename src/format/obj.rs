@@ -70,7 +70,9 @@ pub fn load_obj(path: &Path, mtl_override: Option<MaterialOverride>) -> Result<O
     // (`f 1//-2`) overflows, which panics where overflow is
     // checked (debug and test builds; release builds wrap, to an
     // out-of-bounds error or another vertex's normal). A panic in the
-    // parser is a file it cannot read.
+    // parser is a file it cannot read. Release builds abort on a panic
+    // (Cargo.toml), so this catch serves the builds that check overflow,
+    // where the panic happens.
     let parsed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         tobj::load_obj_buf(&mut BufReader::new(file), &options, load_mtl)
     }))
