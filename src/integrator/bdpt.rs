@@ -20,7 +20,9 @@ use super::light_path::{camera_splat, follow_light_walk};
 use super::mis::mis;
 use super::sink::SampleSink;
 use super::vcm::LightPass;
-use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, MergeWeights, Walk};
+use super::walk::{
+    light_paths_per_pass, sample_direction, start_light_walk, LightVertex, MergeWeights, Walk,
+};
 use super::{PixelSample, ThreadState};
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
@@ -179,8 +181,13 @@ impl Bidirectional {
                 break;
             }
             let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
-            if !bsdf.is_delta() {
-                let (l, weight) = light_sample(scene, &surface, &bsdf, wo, &walk, sampler);
+            // The numbers in their usual order (the light sample's, then the
+            // BSDF's), the next direction before the shadow rays (see
+            // `Walk::follow`).
+            let light_numbers = (!bsdf.is_delta()).then(|| (sampler.next_1d(), sampler.next_2d()));
+            let sampled = sample_direction(&bsdf, wo, sampler, Transport::Radiance);
+            if let Some(numbers) = light_numbers {
+                let (l, weight) = light_sample(scene, &surface, &bsdf, wo, &walk, numbers);
                 add(&mut result, (walk.throughput * l, weight), 1, t, sink);
                 for v in light_vertices {
                     if v.length + 1 + walk.length > max_depth {
@@ -194,7 +201,7 @@ impl Bidirectional {
                     result += walk.throughput * pass.merge(&surface, &bsdf, wo, &walk, max_depth);
                 }
             }
-            if !walk.scatter(&bsdf, &surface, wo, sampler, Transport::Radiance) {
+            if !walk.follow(sampled, &bsdf, &surface, wo, sampler, Transport::Radiance) {
                 break;
             }
             walk.length += 1;
@@ -291,17 +298,16 @@ fn escaped(scene: &Scene, dir: Vec3, walk: &Walk) -> Weighted {
     )
 }
 
-/// s = 1: a point chosen on a light, connected to the camera vertex (eq. 44).
+/// s = 1: a point chosen on a light, connected to the camera vertex (eq. 44);
+/// `u_select` chooses the light, `u_point` the point on it.
 fn light_sample(
     scene: &Scene,
     surface: &SurfacePoint,
     bsdf: &Bsdf,
     wo: Vec3,
     walk: &Walk,
-    sampler: &mut Sampler,
+    (u_select, u_point): (f32, (f32, f32)),
 ) -> Weighted {
-    let u_select = sampler.next_1d();
-    let u_point = sampler.next_2d();
     let Some((index, pick)) = scene.light_selector.sample(u_select) else {
         return NOTHING;
     };

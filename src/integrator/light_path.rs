@@ -3,7 +3,7 @@
 //! they differ only in what they do at each vertex.
 
 use super::connect::{visible, CameraConnection, Endpoint};
-use super::walk::{LightVertex, Walk};
+use super::walk::{sample_direction, LightVertex, Walk};
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
 use crate::geometry::Ray;
@@ -12,8 +12,8 @@ use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
 
-/// Continues `walk` from a light, calling `visit` at every vertex that is
-/// not a delta (the vertices a connection can reach), until the path would
+/// Continues `walk` from a light, calling `visit` (which must draw no
+/// numbers from `sampler`) at every vertex that is not a delta (the vertices a connection can reach), until the path would
 /// need more than `max_depth` segments to reach the camera, leaves the
 /// scene, or ends by Russian roulette.
 pub fn follow_light_walk(
@@ -37,6 +37,16 @@ pub fn follow_light_walk(
         walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
         let material = &scene.materials[scene.shading[hit.triangle as usize].material as usize];
         let bsdf = material.bsdf(&surface, wo);
+        // A further vertex would need at least one more segment to reach the camera.
+        let goes_on = walk.length + 2 <= max_depth;
+        // The next direction before the visit's shadow ray (see `Walk::follow`);
+        // the visit draws no numbers, so they are the same either way.
+        let sampled = if goes_on {
+            sampler.start_vertex();
+            sample_direction(&bsdf, wo, sampler, Transport::Importance)
+        } else {
+            None
+        };
 
         if !bsdf.is_delta() {
             visit(&LightVertex {
@@ -50,12 +60,7 @@ pub fn follow_light_walk(
                 d_vm: walk.d_vm,
             });
         }
-        // A further vertex would need at least one more segment to reach the camera.
-        if walk.length + 2 > max_depth {
-            break;
-        }
-        sampler.start_vertex();
-        if !walk.scatter(&bsdf, &surface, wo, sampler, Transport::Importance) {
+        if !goes_on || !walk.follow(sampled, &bsdf, &surface, wo, sampler, Transport::Importance) {
             break;
         }
         walk.length += 1;

@@ -91,13 +91,19 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         }
 
         let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
-        if !bsdf.is_delta() {
-            result += throughput * direct_light(scene, &surface, &bsdf, wo, sampler);
-        }
-
+        // The numbers are drawn in the order they always were (the light
+        // sample's, then the BSDF's), but the next direction is sampled
+        // before the shadow ray is traced: its chain of dependent divisions
+        // and square roots then runs while the shadow ray is traversed,
+        // rather than after it, on the way to the next closest hit.
+        let light_numbers = (!bsdf.is_delta()).then(|| (sampler.next_1d(), sampler.next_2d()));
         let u = sampler.next_2d();
         let u_lobe = sampler.next_1d();
-        let Some(s) = bsdf.sample(wo, u, u_lobe, Transport::Radiance) else {
+        let sampled = bsdf.sample(wo, u, u_lobe, Transport::Radiance);
+        if let Some((u_select, u_point)) = light_numbers {
+            result += throughput * direct_light(scene, &surface, &bsdf, wo, u_select, u_point);
+        }
+        let Some(s) = sampled else {
             break;
         };
         throughput *= s.weight;
@@ -141,16 +147,16 @@ fn escaped(scene: &Scene, dir: glam::Vec3, previous_delta: bool, previous_pdf: f
     radiance * power_heuristic(previous_pdf, light_pdf)
 }
 
-/// One light sample at a non-delta surface, MIS-weighted against BSDF sampling.
+/// One light sample at a non-delta surface, MIS-weighted against BSDF
+/// sampling: `u_select` chooses the light, `u_point` the point on it.
 fn direct_light(
     scene: &Scene,
     surface: &SurfacePoint,
     bsdf: &Bsdf,
     wo: glam::Vec3,
-    sampler: &mut Sampler,
+    u_select: f32,
+    u_point: (f32, f32),
 ) -> Rgb {
-    let u_select = sampler.next_1d();
-    let u_point = sampler.next_2d();
     let Some((index, pick)) = scene.light_selector.sample(u_select) else {
         return Rgb::ZERO;
     };

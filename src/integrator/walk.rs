@@ -114,19 +114,23 @@ impl Walk {
         self.d_vm /= c;
     }
 
-    /// Samples the next direction at `surface`; false when the walk ends
-    /// (no valid direction, or Russian roulette).
-    pub fn scatter(
+    /// Continues the walk along `sampled` (from [`sample_direction`] at
+    /// `surface`), or ends it when there is none or Russian roulette (which
+    /// draws its number here) says so. The integrators sample the
+    /// direction first and follow it after their connections at the
+    /// vertex: the sample's chain of dependent divisions and roots then
+    /// runs while the connections' shadow rays are traversed, rather than
+    /// after them on the way to the next closest hit.
+    pub fn follow(
         &mut self,
+        sampled: Option<BsdfSample>,
         bsdf: &Bsdf,
         surface: &SurfacePoint,
         wo: Vec3,
         sampler: &mut Sampler,
         mode: Transport,
     ) -> bool {
-        let u = sampler.next_2d();
-        let u_lobe = sampler.next_1d();
-        let Some(s) = bsdf.sample(wo, u, u_lobe, mode) else {
+        let Some(s) = sampled else {
             return false;
         };
         if self.weighted {
@@ -174,6 +178,21 @@ impl Walk {
             self.d_vcm = mis(1.0 / s.pdf);
         }
     }
+}
+
+/// The direction a walk leaves a vertex in: two numbers for the direction
+/// and one for the lobe, drawn from `sampler`; `None` when the BSDF gives
+/// no valid direction. See [`Walk::follow`].
+#[inline(always)]
+pub fn sample_direction(
+    bsdf: &Bsdf,
+    wo: Vec3,
+    sampler: &mut Sampler,
+    mode: Transport,
+) -> Option<BsdfSample> {
+    let u = sampler.next_2d();
+    let u_lobe = sampler.next_1d();
+    bsdf.sample(wo, u, u_lobe, mode)
 }
 
 /// One over `start`'s largest channel: a walk starting there begins

@@ -92,7 +92,7 @@ impl Light {
     // and paid a call's register saves; inlined, renders take 2-3% fewer
     // instructions, and the Cornell box renders 1.03-1.05x (pt) to
     // 1.06-1.08x (lt, bdpt) the samples per second (docs/benchmarks.md,
-    // "Four calls inlined"). Inlining more (the sampler, `Walk::scatter`)
+    // "Four calls inlined"). Inlining more (the sampler, the walk's scattering)
     // was no faster, or slower.
     #[inline(always)]
     pub fn sample_incident(&self, receiver: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
