@@ -13,9 +13,10 @@ use crate::scene::Scene;
 use glam::Vec3;
 
 /// Continues `walk` from a light, calling `visit` (which must draw no
-/// numbers from `sampler`) at every vertex that is not a delta (the vertices a connection can reach), until the path would
-/// need more than `max_depth` segments to reach the camera, leaves the
-/// scene, or ends by Russian roulette.
+/// numbers from `sampler`) at every vertex that is not a delta (the
+/// vertices a connection can reach), until the path would need more than
+/// `max_depth` segments to reach the camera, leaves the scene, or ends by
+/// Russian roulette.
 pub fn follow_light_walk(
     scene: &Scene,
     sampler: &mut Sampler,
