@@ -186,8 +186,9 @@ impl Bidirectional {
             // `Walk::follow`).
             let light_numbers = (!bsdf.is_delta()).then(|| (sampler.next_1d(), sampler.next_2d()));
             let sampled = sample_direction(&bsdf, wo, sampler, Transport::Radiance);
-            if let Some(numbers) = light_numbers {
-                let (l, weight) = light_sample(scene, &surface, &bsdf, wo, &walk, numbers);
+            if let Some((u_select, u_point)) = light_numbers {
+                let (l, weight) =
+                    light_sample(scene, &surface, &bsdf, wo, &walk, u_select, u_point);
                 add(&mut result, (walk.throughput * l, weight), 1, t, sink);
                 for v in light_vertices {
                     if v.length + 1 + walk.length > max_depth {
@@ -306,7 +307,8 @@ fn light_sample(
     bsdf: &Bsdf,
     wo: Vec3,
     walk: &Walk,
-    (u_select, u_point): (f32, (f32, f32)),
+    u_select: f32,
+    u_point: (f32, f32),
 ) -> Weighted {
     let Some((index, pick)) = scene.light_selector.sample(u_select) else {
         return NOTHING;

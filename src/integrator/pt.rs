@@ -12,6 +12,7 @@
 
 use super::connect::{sample_lens, unoccluded};
 use super::mis::power_heuristic;
+use super::walk::sample_direction;
 use super::PixelSample;
 use super::ROULETTE_START;
 use crate::camera::Camera;
@@ -98,9 +99,7 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         // traversed (see `Walk::follow` for what that measured). Tracing
         // the next closest hit before the shadow ray as well was slower.
         let light_numbers = (!bsdf.is_delta()).then(|| (sampler.next_1d(), sampler.next_2d()));
-        let u = sampler.next_2d();
-        let u_lobe = sampler.next_1d();
-        let sampled = bsdf.sample(wo, u, u_lobe, Transport::Radiance);
+        let sampled = sample_direction(&bsdf, wo, sampler, Transport::Radiance);
         if let Some((u_select, u_point)) = light_numbers {
             result += throughput * direct_light(scene, &surface, &bsdf, wo, u_select, u_point);
         }
