@@ -317,12 +317,11 @@ fn light_sample(
     let Some(sample) = light.sample_incident(surface.position, u_point) else {
         return NOTHING;
     };
-    let f = bsdf.eval(wo, sample.wi);
+    let (f, bsdf_pdf, reverse_pdf) = bsdf.eval_pdfs(wo, sample.wi, Transport::Radiance);
     if is_black(f) {
         return NOTHING;
     }
     let pdfs = light.pdfs_for_incident(sample.wi, sample.distance, sample.normal, sample.pdf);
-    let (bsdf_pdf, reverse_pdf) = bsdf.pdfs(wo, sample.wi);
     // BSDF sampling can never hit a delta light.
     let bsdf_pdf = if light.is_delta() { 0.0 } else { bsdf_pdf };
     let cos_receiver = sample.wi.dot(surface.geometric_normal).abs();
@@ -357,16 +356,14 @@ fn connect(
     }
     let distance = distance2.sqrt();
     let dir = to_light / distance;
-    let camera_f = bsdf.eval(wo, dir);
+    let (camera_f, camera_pdf, camera_reverse) = bsdf.eval_pdfs(wo, dir, Transport::Radiance);
     if is_black(camera_f) {
         return NOTHING;
     }
-    let light_f = v.bsdf.eval_mode(v.wo, -dir, Transport::Importance);
+    let (light_f, light_pdf, light_reverse) = v.bsdf.eval_pdfs(v.wo, -dir, Transport::Importance);
     if is_black(light_f) {
         return NOTHING;
     }
-    let (camera_pdf, camera_reverse) = bsdf.pdfs(wo, dir);
-    let (light_pdf, light_reverse) = v.bsdf.pdfs(v.wo, -dir);
     let cos_camera = dir.dot(surface.geometric_normal).abs();
     let cos_light = dir.dot(v.surface.geometric_normal).abs();
     // Solid-angle densities turned into area densities at the other end.

@@ -376,6 +376,39 @@ impl Bsdf {
         }
     }
 
+    /// [`Bsdf::eval_mode`] and [`Bsdf::pdfs`] at once, for the connections
+    /// that need all three: the side of `wi` and its local coordinates are
+    /// then worked out once rather than three times. Returns f · |cos θi|,
+    /// the density of `wi` given `wo`, and of `wo` given `wi`, each the
+    /// same number the separate calls give.
+    #[inline]
+    pub fn eval_pdfs(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Rgb, f32, f32) {
+        let Some(reflected) = self.side(wi) else {
+            return (Rgb::ZERO, 0.0, 0.0);
+        };
+        let (value, pdf, reverse_pdf) = match &self.kind {
+            BsdfKind::Diffuse { albedo } if reflected => {
+                let wi_local = self.frame.to_local(wi);
+                (
+                    diffuse::eval(*albedo, wi_local),
+                    diffuse::pdf(wi_local),
+                    diffuse::pdf(self.frame.to_local(wo)),
+                )
+            }
+            BsdfKind::Conductor(_) | BsdfKind::RoughDielectric(_) | BsdfKind::Plastic(_) => {
+                let value = self.eval_microfacet(wo, wi, reflected, mode);
+                let (pdf, reverse_pdf) = self.microfacet_pdfs(wo, wi, reflected);
+                (value, pdf, reverse_pdf)
+            }
+            _ => return (Rgb::ZERO, 0.0, 0.0),
+        };
+        let value = match mode {
+            Transport::Radiance => value,
+            Transport::Importance => value * self.shading_correction(wo, wi),
+        };
+        (value, pdf, reverse_pdf)
+    }
+
     /// Like [`Bsdf::eval`], for light flowing from `wi` to `wo` (radiance) or
     /// from `wo` to `wi` (importance, on light paths). For importance the
     /// cosine factor carries the correction that keeps shading normals

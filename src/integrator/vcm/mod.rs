@@ -29,7 +29,7 @@ use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
 use crate::film::Splat;
 use crate::geometry::SurfacePoint;
-use crate::material::Bsdf;
+use crate::material::{Bsdf, Transport};
 use crate::scene::Scene;
 use glam::Vec3;
 use grid::{HashGrid, Located};
@@ -275,11 +275,10 @@ impl LightPass {
             // The light arrived along -v.wo; the camera's BSDF scatters it to wo.
             let wi = v.wo;
             let cos = wi.dot(surface.geometric_normal).abs();
-            let f = bsdf.eval(wo, wi);
+            let (f, pdf, reverse) = bsdf.eval_pdfs(wo, wi, Transport::Radiance);
             if cos <= 1e-6 || is_black(f) {
                 return;
             }
-            let (pdf, reverse) = bsdf.pdfs(wo, wi);
             let w_light = v.d_vcm * vc + v.d_vm * mis(pdf);
             let w_camera = camera_weight + walk.d_vm * mis(reverse);
             // `eval` is f · |cos| about the shading normal; the photon's flux
