@@ -63,6 +63,12 @@ pub fn run_info(path: &std::path::Path, cache: &CacheArgs) -> Result<()> {
             _ => format!("built in {:.3} s", scene.report.bvh_build_seconds),
         }
     );
+    if scene.bvh.is_flat() {
+        outln!(
+            "            traced flat: at most {} triangles, each ray tests them all",
+            tracer::bvh::wide::FLAT_MAX_TRIANGLES
+        );
+    }
     let s = &desc.settings;
     outln!(
         "render:     {}x{}, {} spp, {}, max depth {}, seed {} -> {}",

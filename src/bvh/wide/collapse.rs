@@ -108,9 +108,10 @@ impl WideBvh {
             },
             nodes: nodes.into(),
             blocks: blocks.into(),
-            prefetch: false,
+            traversal: super::Traversal::Tree,
+            flat: Vec::new(),
         };
-        wide.prefetch = wide.memory_bytes() >= super::PREFETCH_MIN_BYTES;
+        wide.plan_traversal();
         wide.report.sah_cost = wide.sah_cost(parallel);
         wide
     }

@@ -23,9 +23,11 @@
 //! Built by collapsing the binary SAH BVH (see `collapse.rs`).
 
 mod collapse;
+mod flat;
 mod packet;
 mod traverse;
 
+pub use flat::FLAT_MAX_TRIANGLES;
 pub use packet::PACKET_SIZE;
 
 use super::BuildOptions;
@@ -96,9 +98,23 @@ pub struct WideBvh {
     root: u32,
     bounds: Aabb,
     report: BuildReport,
-    /// Whether traversal prefetches the children it defers (see
+    /// How rays traverse: see `Traversal`.
+    traversal: Traversal,
+    /// The triangles in groups of sixteen, for scenes small enough to
+    /// trace without the tree (see `flat.rs`); empty otherwise.
+    flat: Vec<flat::TriangleGroup>,
+}
+
+/// How a BVH's rays find their hits, chosen from its size when it is made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Traversal {
+    /// Down the tree.
+    Tree,
+    /// Down the tree, prefetching each child a ray defers (see
     /// `PREFETCH_MIN_BYTES`).
-    prefetch: bool,
+    Prefetching,
+    /// Every triangle tested, sixteen at a time (see `flat.rs`).
+    Flat,
 }
 
 /// Trees at least this large are traversed with prefetches: each child a
@@ -133,16 +149,61 @@ impl WideBvh {
         wide
     }
 
-    /// Whether traversal prefetches deferred children: by default for
-    /// trees of at least `PREFETCH_MIN_BYTES`.
-    pub fn prefetches(&self) -> bool {
-        self.prefetch
+    /// Chooses how rays will traverse: flat for the smallest scenes (on
+    /// CPUs with AVX-512, where it measured faster), with prefetches for
+    /// the largest.
+    fn plan_traversal(&mut self) {
+        self.flat = if cfg!(target_feature = "avx512f") {
+            flat::groups(&self.blocks)
+        } else {
+            Vec::new()
+        };
+        self.traversal = if !self.flat.is_empty() {
+            Traversal::Flat
+        } else if self.memory_bytes() >= PREFETCH_MIN_BYTES {
+            Traversal::Prefetching
+        } else {
+            Traversal::Tree
+        };
     }
 
-    /// Overrides the size rule for prefetching, for benchmarks and tests:
-    /// hits are the same either way.
+    /// Whether rays test every triangle rather than traverse the tree: by
+    /// default for scenes of at most [`FLAT_MAX_TRIANGLES`] triangles, on
+    /// CPUs with AVX-512.
+    pub fn is_flat(&self) -> bool {
+        self.traversal == Traversal::Flat
+    }
+
+    /// Overrides the rule for tracing flat, for benchmarks and tests: hits
+    /// are the same either way (see `flat.rs`). A scene of more than
+    /// [`FLAT_MAX_TRIANGLES`] stays with its tree.
+    pub fn set_flat(&mut self, on: bool) {
+        self.flat = if on {
+            flat::groups(&self.blocks)
+        } else {
+            Vec::new()
+        };
+        self.traversal = if self.flat.is_empty() {
+            Traversal::Tree
+        } else {
+            Traversal::Flat
+        };
+    }
+
+    /// Whether traversal goes down the tree prefetching deferred children:
+    /// by default for trees of at least `PREFETCH_MIN_BYTES`.
+    pub fn prefetches(&self) -> bool {
+        self.traversal == Traversal::Prefetching
+    }
+
+    /// Overrides the rules for prefetching (and for tracing flat), for
+    /// benchmarks and tests: hits are the same either way.
     pub fn set_prefetch(&mut self, on: bool) {
-        self.prefetch = on;
+        self.traversal = if on {
+            Traversal::Prefetching
+        } else {
+            Traversal::Tree
+        };
     }
 
     /// What the build produced and how long it took.
@@ -236,9 +297,10 @@ impl WideBvh {
             root,
             bounds,
             report,
-            prefetch: false,
+            traversal: Traversal::Tree,
+            flat: Vec::new(),
         };
-        bvh.prefetch = bvh.memory_bytes() >= PREFETCH_MIN_BYTES;
+        bvh.plan_traversal();
         Ok(bvh)
     }
 

@@ -6,14 +6,14 @@
 //! same distances bit for bit.
 
 use super::{
-    TriangleBlock, WideBvh, WideNode, EMPTY_CHILD, LEAF_BIT, LEAF_COUNT_SHIFT, LEAF_INDEX_MASK,
-    WIDTH,
+    Traversal, TriangleBlock, WideBvh, WideNode, EMPTY_CHILD, LEAF_BIT, LEAF_COUNT_SHIFT,
+    LEAF_INDEX_MASK, WIDTH,
 };
 use crate::bvh::Hit;
 use crate::geometry::triangle::RayShear;
 use crate::geometry::Ray;
 use std::mem::MaybeUninit;
-use wide::{f32x4, f32x8};
+use wide::{f32x16, f32x4, f32x8};
 
 /// A leaf reference's block index and triangle count.
 #[inline(always)]
@@ -301,42 +301,63 @@ impl RayLanes {
     }
 }
 
-/// The watertight test on eight lanes, from each lane's three vertices
-/// already made relative to its ray's origin and sheared (x, y, and the
-/// unscaled z): the edge functions, decided in double precision where single
-/// precision gives an exact zero in a lane of `lanes`, then a mask of the
-/// lanes hit within (`tmin`, `tmax`), their distances, and the barycentrics
-/// of vertices 1 and 2. Shared by the single-ray test (eight triangles,
-/// one ray) and the packet test (one triangle, eight rays).
-#[inline(always)]
-pub(super) fn watertight_lanes(
-    vertices: [(f32x8, f32x8, f32x8); 3],
-    sz: f32x8,
-    lanes: u32,
-    tmin: f32x8,
-    tmax: f32x8,
-) -> (f32x8, f32x8, f32x8, f32x8) {
-    let [(ax, ay, az), (bx, by, bz), (cx, cy, cz)] = vertices;
-    let mut u = cx * by - cy * bx;
-    let mut v = ax * cy - ay * cx;
-    let mut w = bx * ay - by * ax;
-    let zero = f32x8::ZERO;
-    let on_edge = (u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero)).to_bitmask() & lanes;
-    if on_edge != 0 {
-        let xy = [ax, ay, bx, by, cx, cy].map(|c| c.to_array());
-        let [ua, va, wa] = exact_edges(on_edge, xy, [u, v, w].map(|c| c.to_array()));
-        (u, v, w) = (f32x8::new(ua), f32x8::new(va), f32x8::new(wa));
-    }
-    let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
-        & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
-    let det = u + v + w;
-    let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
-    let inv_det = f32x8::ONE / det;
-    let t = t_scaled * inv_det;
-    // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
-    let hit = !outside & det.simd_ne(zero) & t.simd_gt(tmin) & t.simd_lt(tmax);
-    (hit, t, v * inv_det, w * inv_det)
+/// Defines `$name`, the watertight test on the lanes of `$lanes`, from
+/// each lane's three vertices already made relative to its ray's origin
+/// and sheared (x, y, and the unscaled z): the edge functions, decided in
+/// double precision where single precision gives an exact zero in a lane
+/// of `lanes`, then a mask of the lanes hit within (`tmin`, `tmax`), their
+/// distances, and the barycentrics of vertices 1 and 2. One body for both
+/// widths, so the eight-lane and sixteen-lane tests compute the same
+/// numbers lane by lane.
+macro_rules! watertight_test {
+    ($(#[$doc:meta])* $name:ident, $lanes:ty) => {
+        $(#[$doc])*
+        #[inline(always)]
+        pub(super) fn $name(
+            vertices: [($lanes, $lanes, $lanes); 3],
+            sz: $lanes,
+            lanes: u32,
+            tmin: $lanes,
+            tmax: $lanes,
+        ) -> ($lanes, $lanes, $lanes, $lanes) {
+            let [(ax, ay, az), (bx, by, bz), (cx, cy, cz)] = vertices;
+            let mut u = cx * by - cy * bx;
+            let mut v = ax * cy - ay * cx;
+            let mut w = bx * ay - by * ax;
+            let zero = <$lanes>::ZERO;
+            let on_edge =
+                (u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero)).to_bitmask() & lanes;
+            if on_edge != 0 {
+                let xy = [ax, ay, bx, by, cx, cy].map(|c| c.to_array());
+                let [ua, va, wa] = exact_edges(on_edge, xy, [u, v, w].map(|c| c.to_array()));
+                (u, v, w) = (<$lanes>::new(ua), <$lanes>::new(va), <$lanes>::new(wa));
+            }
+            let outside = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
+                & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
+            let det = u + v + w;
+            let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
+            let inv_det = <$lanes>::ONE / det;
+            let t = t_scaled * inv_det;
+            // Comparisons with NaN are false, so a zero determinant (0 × ∞) never hits.
+            let hit = !outside & det.simd_ne(zero) & t.simd_gt(tmin) & t.simd_lt(tmax);
+            (hit, t, v * inv_det, w * inv_det)
+        }
+    };
 }
+
+watertight_test!(
+    /// The watertight test on eight lanes: for the single-ray test (eight
+    /// triangles, one ray) and the packet test (one triangle, eight rays).
+    watertight_lanes,
+    f32x8
+);
+
+watertight_test!(
+    /// The watertight test on sixteen lanes: for the flat scenes' groups
+    /// of sixteen triangles (see `flat.rs`).
+    watertight_lanes_16,
+    f32x16
+);
 
 impl WideBvh {
     /// Asks the cache for the node or leaf block `reference` names, which
@@ -371,20 +392,28 @@ impl WideBvh {
 
     /// The closest hit with `ray.tmin < t < ray.tmax`.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        if self.prefetch {
-            self.closest_hit::<true>(ray)
-        } else {
+        // The tree first, in a branch of its own: the other ways cost it
+        // nothing but this test.
+        if self.traversal == Traversal::Tree {
             self.closest_hit::<false>(ray)
+        } else if self.traversal == Traversal::Flat {
+            self.closest_hit_flat(ray)
+        } else {
+            self.closest_hit::<true>(ray)
         }
     }
 
     /// Whether anything lies on the ray within (tmin, tmax): for shadow
     /// rays, so it stops at the first hit it finds, in whatever order.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        if self.prefetch {
-            self.any_hit::<true>(ray)
-        } else {
+        // The tree first, in a branch of its own: the other ways cost it
+        // nothing but this test.
+        if self.traversal == Traversal::Tree {
             self.any_hit::<false>(ray)
+        } else if self.traversal == Traversal::Flat {
+            self.any_hit_flat(ray)
+        } else {
+            self.any_hit::<true>(ray)
         }
     }
 
