@@ -155,18 +155,10 @@ impl WideBvh {
     /// CPUs with AVX-512, where it measured faster), with prefetches for
     /// the largest.
     fn plan_traversal(&mut self) {
-        self.flat = if cfg!(target_feature = "avx512f") {
-            flat::groups(&self.blocks)
-        } else {
-            Vec::new()
-        };
-        self.traversal = if !self.flat.is_empty() {
-            Traversal::Flat
-        } else if self.memory_bytes() >= PREFETCH_MIN_BYTES {
-            Traversal::Prefetching
-        } else {
-            Traversal::Tree
-        };
+        self.set_flat(cfg!(target_feature = "avx512f"));
+        if !self.is_flat() && self.memory_bytes() >= PREFETCH_MIN_BYTES {
+            self.traversal = Traversal::Prefetching;
+        }
     }
 
     /// Whether rays test every triangle rather than traverse the tree: by
