@@ -392,8 +392,8 @@ impl WideBvh {
 
     /// The closest hit with `ray.tmin < t < ray.tmax`.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        // The tree first, in a branch of its own: the other ways cost it
-        // nothing but this test.
+        // The tree first: the choice costs its rays one test and branch
+        // (the perf gate's ray workloads: 0.4-0.8% more instructions).
         if self.traversal == Traversal::Tree {
             self.closest_hit::<false>(ray)
         } else if self.traversal == Traversal::Flat {
@@ -406,8 +406,7 @@ impl WideBvh {
     /// Whether anything lies on the ray within (tmin, tmax): for shadow
     /// rays, so it stops at the first hit it finds, in whatever order.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        // The tree first, in a branch of its own: the other ways cost it
-        // nothing but this test.
+        // The tree first, as in `intersect`.
         if self.traversal == Traversal::Tree {
             self.any_hit::<false>(ray)
         } else if self.traversal == Traversal::Flat {
