@@ -8,7 +8,7 @@
 //! tests one to three nodes and two or three leaf pairs, each node costing
 //! about what a group does; the two group tests cost less. Past two groups
 //! the tree wins: on Cornell boxes with more boxes added, three groups
-//! (42 triangles) ran even with the tree and four (52) 0.85–0.89x of it.
+//! (42 triangles) ran even with the tree and four (52) 0.88–0.89x of it.
 //! See docs/benchmarks.md ("Small scenes traced flat").
 //!
 //! The test is the tree's, lane for lane (the same watertight arithmetic,
@@ -44,8 +44,13 @@ pub(super) struct TriangleGroup {
 /// The triangles of `blocks` in groups of sixteen, in leaf order, when
 /// there are at most `FLAT_MAX_TRIANGLES` of them; none otherwise.
 pub(super) fn groups(blocks: &[TriangleBlock]) -> Vec<TriangleGroup> {
+    // Every block holds at least one triangle, so a large scene is ruled
+    // out by its block count alone, without reading its blocks (a scene
+    // from the cache maps them from disk, and would page them all in).
     let used = |b: &TriangleBlock| b.id.iter().filter(|&&id| id != u32::MAX).count();
-    if blocks.iter().map(used).sum::<usize>() > FLAT_MAX_TRIANGLES {
+    if blocks.len() > FLAT_MAX_TRIANGLES
+        || blocks.iter().map(used).sum::<usize>() > FLAT_MAX_TRIANGLES
+    {
         return Vec::new();
     }
     let mut groups: Vec<TriangleGroup> = Vec::new();

@@ -193,6 +193,8 @@ impl WideBvh {
     /// Overrides the rules for prefetching (and for tracing flat), for
     /// benchmarks and tests: hits are the same either way.
     pub fn set_prefetch(&mut self, on: bool) {
+        // The groups go with flat tracing: `flat` is empty unless it is chosen.
+        self.flat = Vec::new();
         self.traversal = if on {
             Traversal::Prefetching
         } else {
