@@ -13,7 +13,7 @@
 //! roulette stays an unbiased reweighting of the throughput.
 
 use super::mis::mis;
-use super::ROULETTE_START;
+use super::{LIGHT_ROULETTE_START, ROULETTE_START};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::ray::offset_origin;
@@ -152,7 +152,11 @@ impl Walk {
             surface.magnitude,
         );
         self.dir = s.wi;
-        if self.length >= ROULETTE_START {
+        let roulette_start = match mode {
+            Transport::Radiance => ROULETTE_START,
+            Transport::Importance => LIGHT_ROULETTE_START,
+        };
+        if self.length >= roulette_start {
             let survive = (self.throughput.max_element() * self.roulette_scale).min(1.0);
             if sampler.next_1d() >= survive {
                 return false;

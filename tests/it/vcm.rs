@@ -139,8 +139,12 @@ fn split_sample_ranges_equal_one_render() {
 
 /// Every material and light kind under merging: rough conductors, rough
 /// glass and a thin lens (rough-materials), and an image sky with plastic
-/// (sky-materials), each with a radius of 2% of the scene's size so that
-/// merges carry weight.
+/// (sky-materials), each with a radius of 1% of the scene's size so that
+/// merges carry weight. Not 2%: merging's blur at that radius is itself
+/// measurable here (rough-materials, block (1, 1): 0.0454 against BDPT's
+/// 0.0436, 8 standard errors apart over 64 seeds), and the test should
+/// fail on a wrong merge, not on the radius's known bias (every merge
+/// doubled fails it at 1%: 5.2 standard errors on rough-materials).
 #[test]
 fn vcm_agrees_with_bdpt_on_the_rough_and_sky_scenes() {
     for (path, spp) in [
@@ -148,7 +152,7 @@ fn vcm_agrees_with_bdpt_on_the_rough_and_sky_scenes() {
         ("scenes/sky-materials.json", 16),
     ] {
         let (scene, _) = common::load_scene(common::repo().join(path));
-        let radius = 0.02 * scene.bounds.bounding_sphere().1;
+        let radius = 0.01 * scene.bounds.bounding_sphere().1;
         agrees_with_bdpt(path, radius, spp);
     }
 }
