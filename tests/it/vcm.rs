@@ -139,20 +139,21 @@ fn split_sample_ranges_equal_one_render() {
 
 /// Every material and light kind under merging: rough conductors, rough
 /// glass and a thin lens (rough-materials), and an image sky with plastic
-/// (sky-materials), each with a radius of 1% of the scene's size so that
-/// merges carry weight. Not 2%: merging's blur at that radius is itself
-/// measurable here (rough-materials, block (1, 1): 0.0454 against BDPT's
-/// 0.0436, 8 standard errors apart over 64 seeds), and the test should
-/// fail on a wrong merge, not on the radius's known bias (every merge
-/// doubled fails it at 1%: 5.2 standard errors on rough-materials).
+/// (sky-materials), with radii of 1% and 2% of the scene's size so that
+/// merges carry weight. Rough-materials merges at 1%: at 2% merging's blur
+/// is itself measurable there (block (1, 1): 0.0454 against BDPT's 0.0436,
+/// 8 standard errors apart over 64 seeds), and the test should fail on a
+/// wrong merge, not on the radius's known bias (every merge doubled fails
+/// it at 1%: 5.2 standard errors). Sky-materials shows no such bias at 2%
+/// (largest difference 2.5 standard errors over 64 seeds), so it keeps it.
 #[test]
 fn vcm_agrees_with_bdpt_on_the_rough_and_sky_scenes() {
-    for (path, spp) in [
-        ("scenes/rough-materials.json", 8),
-        ("scenes/sky-materials.json", 16),
+    for (path, spp, radius_fraction) in [
+        ("scenes/rough-materials.json", 8, 0.01),
+        ("scenes/sky-materials.json", 16, 0.02),
     ] {
         let (scene, _) = common::load_scene(common::repo().join(path));
-        let radius = 0.01 * scene.bounds.bounding_sphere().1;
+        let radius = radius_fraction * scene.bounds.bounding_sphere().1;
         agrees_with_bdpt(path, radius, spp);
     }
 }
