@@ -10,7 +10,7 @@ mod traverse;
 pub mod wide;
 
 pub use build::BuildOptions;
-pub use wide::WideBvh;
+pub use wide::{for_lanes, WideBvh, LANES};
 
 use crate::geometry::{Aabb, Triangle};
 

@@ -49,6 +49,10 @@ impl Endpoint {
 }
 
 /// Whether the segment between two points is free, each end moved off its surface.
+/// Always inlined: the light tracer and BDPT call it in their hot loops, and
+/// the compiler stopped inlining it there once the path tracer's lanes
+/// came in (perf gate: light tracer +1.7% instructions).
+#[inline(always)]
 pub fn visible(scene: &Scene, from: Endpoint, to: Endpoint) -> bool {
     let dir = to.position - from.position;
     let origin = from.lifted(dir);
@@ -64,28 +68,32 @@ pub fn visible(scene: &Scene, from: Endpoint, to: Endpoint) -> bool {
 /// Whether nothing blocks the segment from `surface` to the light sample.
 /// Both ends are moved off their surfaces, so neither can block itself.
 pub fn unoccluded(scene: &Scene, surface: &SurfacePoint, sample: &IncidentSample) -> bool {
+    shadow_ray(surface, sample).is_none_or(|ray| !scene.occluded(&ray))
+}
+
+/// The shadow ray from `surface` to the light sample, each end moved off
+/// its surface; `None` where the two ends meet, which nothing can block.
+pub fn shadow_ray(surface: &SurfacePoint, sample: &IncidentSample) -> Option<Ray> {
     let origin = offset_origin(
         surface.position,
         surface.geometric_normal,
         sample.wi,
         surface.magnitude,
     );
-    let ray = if sample.distance.is_infinite() {
-        Ray::new(origin, sample.wi)
+    if sample.distance.is_infinite() {
+        return Some(Ray::new(origin, sample.wi));
+    }
+    let target = if sample.normal == Vec3::ZERO {
+        sample.point
     } else {
-        let target = if sample.normal == Vec3::ZERO {
-            sample.point
-        } else {
-            offset_origin(sample.point, sample.normal, -sample.wi, sample.magnitude)
-        };
-        let to_target = target - origin;
-        let distance = to_target.length();
-        if distance.is_nan() || distance <= 0.0 {
-            return true;
-        }
-        Ray::segment(origin, to_target / distance, distance)
+        offset_origin(sample.point, sample.normal, -sample.wi, sample.magnitude)
     };
-    !scene.occluded(&ray)
+    let to_target = target - origin;
+    let distance = to_target.length();
+    if distance.is_nan() || distance <= 0.0 {
+        return None;
+    }
+    Some(Ray::segment(origin, to_target / distance, distance))
 }
 
 /// A point on the lens, for a camera path's first ray or for a light

@@ -10,6 +10,7 @@
 
 mod bdpt;
 mod connect;
+mod lanes;
 mod light_path;
 mod lt;
 pub mod mis;
@@ -190,6 +191,32 @@ impl Integrator {
         match self {
             Integrator::Vcm(vcm) => Some(vcm.light_pass(scene, camera, seed, index, previous)),
             _ => None,
+        }
+    }
+
+    /// Whether the estimator takes a tile's samples many paths at a time,
+    /// through [`Integrator::sample_pixels`], rather than one by one
+    /// through [`Integrator::sample`]: the path tracer, whose samples
+    /// splat nothing.
+    pub fn samples_in_lanes(&self) -> bool {
+        matches!(self, Integrator::Pt(_))
+    }
+
+    /// For an estimator that [`samples_in_lanes`](Integrator::samples_in_lanes):
+    /// samples `pixels[p].index .. + count` of each pixel `pixels[p]`, the
+    /// estimate of sample `pixels[p].index + i` in `out[p * count + i]`,
+    /// the same numbers [`Integrator::sample`] gives one by one.
+    pub fn sample_pixels(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        pixels: &[PixelSample],
+        count: u32,
+        out: &mut [Rgb],
+    ) {
+        match self {
+            Integrator::Pt(pt) => pt.sample_pixels(scene, camera, pixels, count, out),
+            _ => unreachable!("only the path tracer samples in lanes"),
         }
     }
 

@@ -10,11 +10,12 @@
 //! light needs 2. Russian roulette on the throughput ends long paths without
 //! bias.
 
-use super::connect::{sample_lens, unoccluded};
+use super::connect::{sample_lens, shadow_ray};
 use super::mis::power_heuristic;
 use super::walk::sample_direction;
 use super::PixelSample;
 use super::ROULETTE_START;
+use crate::bvh::Hit;
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
 use crate::geometry::ray::offset_origin;
@@ -24,6 +25,7 @@ use crate::light::Light;
 use crate::material::{Bsdf, Transport};
 use crate::sampling::Sampler;
 use crate::scene::{Scene, NO_LIGHT};
+use glam::Vec3;
 
 /// The path tracer and its settings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,62 +35,136 @@ pub struct PathTracer {
 }
 
 impl PathTracer {
-    /// One sample of `pixel`: a jittered camera ray and the radiance along it.
+    /// One sample of `pixel`: a jittered camera ray and the radiance along
+    /// it. Out of line: the renderer takes the path tracer's samples in
+    /// lanes (`lanes.rs`), and this copy inlined into the tile loop made
+    /// the other integrators' code there slower.
+    #[inline(never)]
     pub fn sample(&self, scene: &Scene, camera: &Camera, pixel: PixelSample) -> Rgb {
+        let mut path = CameraPath::start(camera, pixel);
+        loop {
+            let hit = scene.intersect(&path.ray);
+            let vertex = path.vertex(scene, hit, self.max_depth);
+            if let Some(direct) = vertex.direct {
+                if direct.shadow.is_none_or(|ray| !scene.occluded(&ray)) {
+                    path.add_direct(direct.value);
+                }
+            }
+            if !vertex.continues {
+                return path.radiance;
+            }
+        }
+    }
+}
+
+/// A camera path in progress: the ray it is about to trace, the radiance
+/// it has gathered, and what its next vertex needs to know. The path
+/// tracer's one step is [`CameraPath::vertex`]: `PathTracer::sample` takes
+/// a path's steps one after another, `lanes` takes those of sixteen paths
+/// in turn, tracing their rays together; both compute the same numbers.
+pub(super) struct CameraPath {
+    /// The ray to the path's next vertex.
+    pub ray: Ray,
+    /// Radiance gathered so far, the direct light of shadow rays still out
+    /// excepted.
+    pub radiance: Rgb,
+    sampler: Sampler,
+    throughput: Rgb,
+    /// What the previous vertex knew, to weigh an emitter hit by BSDF sampling.
+    previous_pdf: f32,
+    previous_delta: bool,
+    previous_position: Vec3,
+    segments: u32,
+    /// The product of eta² over the refractions so far. Radiance entering a
+    /// denser medium is scaled by 1/eta² and regains it on leaving; roulette
+    /// reads the throughput with that factor undone, or it would end most
+    /// paths inside glass just for being inside, and the caustics they carry
+    /// would come from a few heavily weighted survivors.
+    eta_squared: f32,
+}
+
+/// What a vertex leaves its caller to do.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Vertex {
+    /// Direct light from a light sample, to add if its shadow ray is free.
+    pub direct: Option<DirectLight>,
+    /// Whether the path goes on along its new `ray`.
+    pub continues: bool,
+}
+
+/// A light sample's contribution, throughput included, and the shadow ray
+/// that decides it (`None`: nothing can block it).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct DirectLight {
+    pub value: Rgb,
+    pub shadow: Option<Ray>,
+}
+
+impl CameraPath {
+    /// The path of `pixel`'s sample: a jittered ray through the pixel.
+    #[inline(always)]
+    pub fn start(camera: &Camera, pixel: PixelSample) -> CameraPath {
         let mut sampler = pixel.camera_sampler();
         let (jx, jy) = sampler.next_2d();
         let (x, y) = (pixel.x as f32 + jx, pixel.y as f32 + jy);
         let ray = camera.ray_from(sample_lens(camera, &mut sampler), x, y);
-        radiance(scene, ray, &mut sampler, self.max_depth)
+        CameraPath {
+            ray,
+            radiance: Rgb::ZERO,
+            sampler,
+            throughput: Rgb::ONE,
+            previous_pdf: 0.0,
+            previous_delta: true,
+            previous_position: ray.origin,
+            segments: 0,
+            eta_squared: 1.0,
+        }
     }
-}
 
-/// Radiance arriving at the camera along `ray`.
-pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u32) -> Rgb {
-    let mut result = Rgb::ZERO;
-    let mut throughput = Rgb::ONE;
-    // What the previous vertex knew, to weigh an emitter hit by BSDF sampling.
-    let mut previous_pdf = 0.0f32;
-    let mut previous_delta = true;
-    let mut previous_position = ray.origin;
-    let mut segments = 0;
-    // The product of eta² over the refractions so far. Radiance entering a
-    // denser medium is scaled by 1/eta² and regains it on leaving; roulette
-    // reads the throughput with that factor undone, or it would end most
-    // paths inside glass just for being inside, and the caustics they carry
-    // would come from a few heavily weighted survivors.
-    let mut eta_squared = 1.0f32;
+    /// Adds the direct light of a vertex whose shadow ray came back free.
+    #[inline(always)]
+    pub fn add_direct(&mut self, value: Rgb) {
+        self.radiance += value;
+    }
 
-    loop {
-        sampler.start_vertex();
-        let Some(hit) = scene.intersect(&ray) else {
-            if scene.environment.is_some() {
-                result += throughput * escaped(scene, ray.dir, previous_delta, previous_pdf);
-            }
-            break;
+    /// The path's vertex where its ray found `hit` (`None`: it left the
+    /// scene): light emitted there, a light sample, and the next direction.
+    #[inline(always)]
+    pub fn vertex(&mut self, scene: &Scene, hit: Option<Hit>, max_depth: u32) -> Vertex {
+        const END: Vertex = Vertex {
+            direct: None,
+            continues: false,
         };
-        segments += 1;
+        self.sampler.start_vertex();
+        let Some(hit) = hit else {
+            if scene.environment.is_some() {
+                self.radiance += self.throughput
+                    * escaped(scene, self.ray.dir, self.previous_delta, self.previous_pdf);
+            }
+            return END;
+        };
+        self.segments += 1;
         let surface = scene.surface(&hit);
-        let wo = -ray.dir;
+        let wo = -self.ray.dir;
         let shading = scene.shading[hit.triangle as usize];
 
         if shading.light != NO_LIGHT {
             if let Light::Area(light) = &scene.lights[shading.light as usize] {
                 let emitted = light.emitted(wo);
                 if !is_black(emitted) {
-                    let weight = if previous_delta {
+                    let weight = if self.previous_delta {
                         1.0
                     } else {
                         let light_pdf = scene.light_selector.pmf(shading.light as usize)
-                            * light.pdf_incident(previous_position, surface.position);
-                        power_heuristic(previous_pdf, light_pdf)
+                            * light.pdf_incident(self.previous_position, surface.position);
+                        power_heuristic(self.previous_pdf, light_pdf)
                     };
-                    result += throughput * emitted * weight;
+                    self.radiance += self.throughput * emitted * weight;
                 }
             }
         }
-        if segments >= max_depth {
-            break;
+        if self.segments >= max_depth {
+            return END;
         }
 
         let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
@@ -98,20 +174,32 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         // divisions and square roots can run while the shadow ray is
         // traversed (see `Walk::follow` for what that measured). Tracing
         // the next closest hit before the shadow ray as well was slower.
-        let light_numbers = (!bsdf.is_delta()).then(|| (sampler.next_1d(), sampler.next_2d()));
-        let sampled = sample_direction(&bsdf, wo, sampler, Transport::Radiance);
+        let light_numbers =
+            (!bsdf.is_delta()).then(|| (self.sampler.next_1d(), self.sampler.next_2d()));
+        let sampled = sample_direction(&bsdf, wo, &mut self.sampler, Transport::Radiance);
+        let mut direct = None;
         if let Some((u_select, u_point)) = light_numbers {
-            result += throughput * direct_light(scene, &surface, &bsdf, wo, u_select, u_point);
+            if let Some((value, shadow)) =
+                direct_light(scene, &surface, &bsdf, wo, u_select, u_point)
+            {
+                direct = Some(DirectLight {
+                    value: self.throughput * value,
+                    shadow,
+                });
+            }
         }
         let Some(s) = sampled else {
-            break;
+            return Vertex {
+                direct,
+                continues: false,
+            };
         };
-        throughput *= s.weight;
-        eta_squared *= s.eta * s.eta;
-        previous_pdf = s.pdf;
-        previous_delta = s.delta;
-        previous_position = surface.position;
-        ray = Ray::new(
+        self.throughput *= s.weight;
+        self.eta_squared *= s.eta * s.eta;
+        self.previous_pdf = s.pdf;
+        self.previous_delta = s.delta;
+        self.previous_position = surface.position;
+        self.ray = Ray::new(
             offset_origin(
                 surface.position,
                 surface.geometric_normal,
@@ -121,15 +209,17 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
             s.wi,
         );
 
-        if segments >= ROULETTE_START {
-            let survive = (throughput.max_element() * eta_squared).min(1.0);
-            if sampler.next_1d() >= survive {
-                break;
+        let mut continues = true;
+        if self.segments >= ROULETTE_START {
+            let survive = (self.throughput.max_element() * self.eta_squared).min(1.0);
+            if self.sampler.next_1d() >= survive {
+                continues = false;
+            } else {
+                self.throughput /= survive;
             }
-            throughput /= survive;
         }
+        Vertex { direct, continues }
     }
-    result
 }
 
 /// The environment seen along `dir` by a ray that left the scene, weighted
@@ -149,6 +239,9 @@ fn escaped(scene: &Scene, dir: glam::Vec3, previous_delta: bool, previous_pdf: f
 
 /// One light sample at a non-delta surface, MIS-weighted against BSDF
 /// sampling: `u_select` chooses the light, `u_point` the point on it.
+/// Returns what it adds if its shadow ray (`None`: nothing can block it)
+/// is free; `None` where it adds nothing whatever the shadow ray finds.
+#[inline(always)]
 fn direct_light(
     scene: &Scene,
     surface: &SurfacePoint,
@@ -156,22 +249,19 @@ fn direct_light(
     wo: glam::Vec3,
     u_select: f32,
     u_point: (f32, f32),
-) -> Rgb {
-    let Some((index, pick)) = scene.light_selector.sample(u_select) else {
-        return Rgb::ZERO;
-    };
-    let Some(sample) = scene.lights[index].sample_incident(surface.position, u_point) else {
-        return Rgb::ZERO;
-    };
+) -> Option<(Rgb, Option<Ray>)> {
+    let (index, pick) = scene.light_selector.sample(u_select)?;
+    let sample = scene.lights[index].sample_incident(surface.position, u_point)?;
     let f = bsdf.eval(wo, sample.wi);
-    if is_black(f) || !unoccluded(scene, surface, &sample) {
-        return Rgb::ZERO;
+    if is_black(f) {
+        return None;
     }
+    let shadow = shadow_ray(surface, &sample);
     let light_pdf = pick * sample.pdf;
     let weight = if sample.delta {
         1.0
     } else {
         power_heuristic(light_pdf, bsdf.pdf(wo, sample.wi))
     };
-    f * sample.value * (weight / light_pdf)
+    Some((f * sample.value * (weight / light_pdf), shadow))
 }

@@ -8,6 +8,7 @@ use super::tiles::{self, Tile};
 use super::Accumulation;
 use crate::camera::Camera;
 use crate::color::is_finite;
+use crate::color::Rgb;
 use crate::film::Splat;
 use crate::integrator::{
     Integrator, LightPass, PixelSample, SampleSink, StrategySample, ThreadState,
@@ -19,6 +20,11 @@ use rayon::prelude::*;
 /// Tiles per batch for the splatting integrators: bounds the splat lists held
 /// at once (a few MB) while leaving enough tiles to keep every thread busy.
 const SPLAT_BATCH: usize = 64;
+
+/// Paths per call of [`Integrator::sample_pixels`] (whole pixels, so at
+/// least one pixel's samples): enough that lanes seldom wait for the
+/// batch's last paths, few enough that the estimates stay in cache.
+const LANE_BATCH: usize = 1024;
 
 /// What one tile hands back: its splats and strategy records, per half.
 type TileOutput = [(Vec<Splat>, Vec<StrategySample>); 2];
@@ -146,28 +152,32 @@ impl Pass<'_> {
         };
         let mut sinks = [sink(), sink()];
         let mut state = ThreadState::default();
-        for y in tile.y0..tile.y1 {
-            for x in tile.x0..tile.x1 {
-                let mut sums = [DVec3::ZERO; 2];
-                let first = PixelSample::new(x, y, self.first as u64, self.seed);
-                for index in self.first..self.first + self.count {
-                    let half = (index % 2) as usize;
-                    let pixel = first.with_index(index as u64);
-                    let l = self.integrator.sample(
-                        self.scene,
-                        self.camera,
-                        pixel,
-                        &mut state,
-                        &mut sinks[half],
-                        light,
-                    );
-                    if is_finite(l) {
-                        sums[half] += l.as_dvec3();
-                    } else {
-                        tile.discarded += 1;
+        if self.integrator.samples_in_lanes() {
+            self.tile_in_lanes(tile);
+        } else {
+            for y in tile.y0..tile.y1 {
+                for x in tile.x0..tile.x1 {
+                    let mut sums = [DVec3::ZERO; 2];
+                    let first = PixelSample::new(x, y, self.first as u64, self.seed);
+                    for index in self.first..self.first + self.count {
+                        let half = (index % 2) as usize;
+                        let pixel = first.with_index(index as u64);
+                        let l = self.integrator.sample(
+                            self.scene,
+                            self.camera,
+                            pixel,
+                            &mut state,
+                            &mut sinks[half],
+                            light,
+                        );
+                        if is_finite(l) {
+                            sums[half] += l.as_dvec3();
+                        } else {
+                            tile.discarded += 1;
+                        }
                     }
+                    tile.add(x, y, sums);
                 }
-                tile.add(x, y, sums);
             }
         }
         tile.count_samples(self.first, self.count);
@@ -175,6 +185,48 @@ impl Pass<'_> {
         self.progress
             .advance(tile.pixel_count() as u64 * self.count as u64);
         sinks.map(|s| (s.splats, s.strategies.unwrap_or_default()))
+    }
+}
+
+impl Pass<'_> {
+    /// `tile`'s samples of this pass, taken by the integrator a batch of
+    /// pixels at a time (see [`Integrator::sample_pixels`]). Out of line,
+    /// so that `tile`, where the other integrators' code is inlined, is
+    /// compiled as it was without it: inlined, it cost the light tracer
+    /// 6% of its speed.
+    #[inline(never)]
+    fn tile_in_lanes(&self, tile: &mut Tile) {
+        let (first, count) = (self.first, self.count);
+        let batch = (LANE_BATCH / count as usize).max(1);
+        let pixels: Vec<(u32, u32)> = (tile.y0..tile.y1)
+            .flat_map(|y| (tile.x0..tile.x1).map(move |x| (x, y)))
+            .collect();
+        let mut samples = Vec::with_capacity(batch);
+        let mut estimates = Vec::new();
+        for chunk in pixels.chunks(batch) {
+            samples.clear();
+            samples.extend(
+                chunk
+                    .iter()
+                    .map(|&(x, y)| PixelSample::new(x, y, first as u64, self.seed)),
+            );
+            estimates.clear();
+            estimates.resize(chunk.len() * count as usize, Rgb::ZERO);
+            self.integrator
+                .sample_pixels(self.scene, self.camera, &samples, count, &mut estimates);
+            for (&(x, y), pixel) in chunk.iter().zip(estimates.chunks(count as usize)) {
+                // As the one-by-one loop in `tile` adds them: the same sums.
+                let mut sums = [DVec3::ZERO; 2];
+                for (index, &l) in (first..).zip(pixel) {
+                    if is_finite(l) {
+                        sums[(index % 2) as usize] += l.as_dvec3();
+                    } else {
+                        tile.discarded += 1;
+                    }
+                }
+                tile.add(x, y, sums);
+            }
+        }
     }
 }
 

@@ -11,7 +11,7 @@ pub mod estimate;
 
 pub use build::{build, build_limited, load, Emitter, Geometry, MtlRecord};
 
-use crate::bvh::{Hit, WideBvh};
+use crate::bvh::{Hit, WideBvh, LANES};
 use crate::geometry::SurfacePoint;
 use crate::geometry::{Aabb, Ray, Triangle};
 use crate::light::{EnvironmentLight, Light, LightSelector};
@@ -121,6 +121,22 @@ impl Scene {
     /// Whether anything lies on the ray within (`tmin`, `tmax`): for shadow rays.
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.bvh.occluded(ray)
+    }
+
+    /// The closest hit of each ray named in `active` (bit k for `rays[k]`),
+    /// into the same lane of `hits`.
+    pub fn intersect_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        active: u32,
+        hits: &mut [Option<Hit>; LANES],
+    ) {
+        self.bvh.intersect_lanes(rays, active, hits);
+    }
+
+    /// Which of the rays named in `active` are blocked, as a bit mask.
+    pub fn occluded_lanes(&self, rays: &[Ray; LANES], active: u32) -> u32 {
+        self.bvh.occluded_lanes(rays, active)
     }
 
     /// The environment light and its index in `lights`, if there is one.

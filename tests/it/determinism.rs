@@ -140,3 +140,53 @@ fn splats_of_many_batches_add_up_alike_for_any_thread_count() {
         }
     }
 }
+
+/// The path tracer takes a tile's samples sixteen paths at a time, their
+/// rays traced together; every sample must be the one it takes alone, bit
+/// for bit. The scenes have between them flat and tree traversal, every
+/// material, every kind of light, the environment and a thin lens.
+#[test]
+fn paths_in_lanes_are_the_paths_one_by_one() {
+    use tracer::color::Rgb;
+    use tracer::integrator::{Integrator, PixelSample, SampleSink, ThreadState};
+    use tracer::settings::IntegratorKind;
+    for path in [
+        "scenes/cornell-box.json",
+        "scenes/cornell-caustics.json",
+        "scenes/mirror-caustic.json",
+        "scenes/lights.json",
+        "scenes/textured.json",
+        "scenes/rough-materials.json",
+        "scenes/sky-materials.json",
+    ] {
+        let (scene, mut settings) = common::load_scene(path);
+        settings.integrator = IntegratorKind::Pt;
+        let integrator = Integrator::new(&settings);
+        assert!(integrator.samples_in_lanes());
+        let camera = settings.camera().unwrap();
+        let (w, h) = (settings.film.width, settings.film.height);
+        // Pixels spread over the image; 37 paths each, not a multiple of
+        // the lanes, from a first index past zero.
+        let pixels: Vec<PixelSample> = (0..23u32)
+            .map(|k| PixelSample::new(k * 97 % w, k * 61 % h, 5, 17))
+            .collect();
+        let count = 37;
+        let mut in_lanes = vec![Rgb::ZERO; pixels.len() * count as usize];
+        integrator.sample_pixels(&scene, &camera, &pixels, count, &mut in_lanes);
+        let (mut state, mut sink) = (ThreadState::default(), SampleSink::default());
+        let alone: Vec<Rgb> = pixels
+            .iter()
+            .flat_map(|p| (0..count as u64).map(move |i| p.with_index(p.index + i)))
+            .map(|sample| integrator.sample(&scene, &camera, sample, &mut state, &mut sink, None))
+            .collect();
+        let bits = |c: &Rgb| c.to_array().map(f32::to_bits);
+        if let Some(k) = (0..alone.len()).find(|&k| bits(&in_lanes[k]) != bits(&alone[k])) {
+            panic!(
+                "{path}: sample {k} is {} in lanes, {} alone",
+                in_lanes[k], alone[k]
+            );
+        }
+        let lit = alone.iter().filter(|c| c.max_element() > 0.0).count();
+        assert!(lit > alone.len() / 4, "{path}: only {lit} lit samples");
+    }
+}

@@ -26,10 +26,12 @@
 
 mod collapse;
 mod flat;
+mod lanes;
 mod packet;
 mod traverse;
 
 pub use flat::FLAT_MAX_TRIANGLES;
+pub use lanes::{for_lanes, LANES};
 pub use packet::PACKET_SIZE;
 
 use super::BuildOptions;

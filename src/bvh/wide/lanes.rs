@@ -1,0 +1,55 @@
+//! Rays of sixteen independent paths handed over together, one per lane:
+//! the path tracer steps sixteen paths at a time (see
+//! `integrator/lanes.rs`). The rays are traced one after another, each
+//! getting exactly the hit it would get alone; what the path tracer gains
+//! is that the processor can overlap sixteen independent traversals,
+//! where one path alone waits on each hit before it can shade.
+//!
+//! Testing each triangle of a flat scene (see `flat.rs`) against all
+//! sixteen rays in one AVX-512 step, with the same arithmetic lane for
+//! lane, was slower: the Cornell box's `pt` took 1.37 s against 1.30 s
+//! one ray at a time (docs/benchmarks.md, "Paths in lanes"). Each ray
+//! has its own projection axes, so every triangle costs eighteen blends
+//! more than the single-ray test, which already fills sixteen lanes with
+//! sixteen triangles.
+
+use super::WideBvh;
+use crate::bvh::Hit;
+use crate::geometry::Ray;
+
+/// Rays per call.
+pub const LANES: usize = 16;
+
+impl WideBvh {
+    /// The closest hit of each ray of `rays` whose bit is set in `active`
+    /// (bit k for `rays[k]`), into the same lane of `hits`; the other
+    /// lanes of `hits` are left as they are.
+    pub fn intersect_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        active: u32,
+        hits: &mut [Option<Hit>; LANES],
+    ) {
+        for_lanes(active, |lane| hits[lane] = self.intersect(&rays[lane]));
+    }
+
+    /// A bit mask of the rays of `rays` named in `active` that are blocked.
+    pub fn occluded_lanes(&self, rays: &[Ray; LANES], active: u32) -> u32 {
+        let mut blocked = 0;
+        for_lanes(active, |lane| {
+            if self.occluded(&rays[lane]) {
+                blocked |= 1 << lane;
+            }
+        });
+        blocked
+    }
+}
+
+/// Calls `f` with each lane whose bit is set in `mask`, lowest first.
+#[inline(always)]
+pub fn for_lanes(mut mask: u32, mut f: impl FnMut(usize)) {
+    while mask != 0 {
+        f(mask.trailing_zeros() as usize);
+        mask &= mask - 1;
+    }
+}

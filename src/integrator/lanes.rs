@@ -1,0 +1,99 @@
+//! The path tracer sixteen paths at a time. Each path takes the same steps
+//! as alone ([`CameraPath::vertex`]), but the sixteen paths' rays to their
+//! next vertices are traced in one call, and so are their shadow rays:
+//! tracing is then work on sixteen independent rays, which the processor
+//! can overlap, where one path alone waits on each hit before it can
+//! shade, and waits on its shading before it can trace again. A lane whose path ends takes the
+//! next path at once (path regeneration), so lanes stay busy however
+//! unequal the paths' lengths.
+//!
+//! Every path is a pure function of its pixel and sample index, and its
+//! estimate lands in its own slot, so the image is the one-path-at-a-time
+//! path tracer's, bit for bit (a test checks it).
+
+use super::pt::CameraPath;
+use super::{PathTracer, PixelSample};
+use crate::bvh::{for_lanes, LANES};
+use crate::camera::Camera;
+use crate::color::Rgb;
+use crate::geometry::Ray;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// The bits of every lane.
+const ALL_LANES: u32 = (1 << LANES) - 1;
+
+impl PathTracer {
+    /// Samples `pixels[p].index .. + count` of each pixel `pixels[p]`:
+    /// `out[p * count + i]` gets what [`PathTracer::sample`] returns for
+    /// sample `pixels[p].index + i`.
+    pub fn sample_pixels(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        pixels: &[PixelSample],
+        count: u32,
+        out: &mut [Rgb],
+    ) {
+        let count = count as usize;
+        let total = pixels.len() * count;
+        assert_eq!(out.len(), total, "one slot per sample");
+        let Some(&first_pixel) = pixels.first() else {
+            return;
+        };
+        // Each lane's path, and the slot of `out` it fills; a lane is in
+        // use while its bit is set in `active`.
+        let mut paths: [CameraPath; LANES] =
+            std::array::from_fn(|_| CameraPath::start(camera, first_pixel));
+        let mut slots = [0; LANES];
+        let mut active = 0u32;
+        let mut next = 0;
+        let unused = Ray::new(Vec3::ZERO, Vec3::Z);
+        let mut rays = [unused; LANES];
+        let mut shadow_rays = [unused; LANES];
+        let mut direct = [Rgb::ZERO; LANES];
+        let mut hits = [None; LANES];
+        loop {
+            let mut free = !active & ALL_LANES;
+            while free != 0 && next < total {
+                let lane = free.trailing_zeros() as usize;
+                free &= free - 1;
+                let pixel = pixels[next / count];
+                let sample = pixel.with_index(pixel.index + (next % count) as u64);
+                paths[lane] = CameraPath::start(camera, sample);
+                slots[lane] = next;
+                active |= 1 << lane;
+                next += 1;
+            }
+            if active == 0 {
+                return;
+            }
+            for_lanes(active, |lane| rays[lane] = paths[lane].ray);
+            scene.intersect_lanes(&rays, active, &mut hits);
+            let (mut shadowed, mut ended) = (0u32, 0u32);
+            for_lanes(active, |lane| {
+                let path = &mut paths[lane];
+                let vertex = path.vertex(scene, hits[lane], self.max_depth);
+                if let Some(light) = vertex.direct {
+                    match light.shadow {
+                        Some(ray) => {
+                            shadow_rays[lane] = ray;
+                            direct[lane] = light.value;
+                            shadowed |= 1 << lane;
+                        }
+                        None => path.add_direct(light.value),
+                    }
+                }
+                if !vertex.continues {
+                    ended |= 1 << lane;
+                }
+            });
+            let blocked = scene.occluded_lanes(&shadow_rays, shadowed);
+            for_lanes(shadowed & !blocked, |lane| {
+                paths[lane].add_direct(direct[lane])
+            });
+            for_lanes(ended, |lane| out[slots[lane]] = paths[lane].radiance);
+            active &= !ended;
+        }
+    }
+}
