@@ -21,7 +21,7 @@ use crate::scene::Scene;
 use glam::Vec3;
 
 /// The bits of every lane.
-const ALL_LANES: u32 = (1 << LANES) - 1;
+const ALL_LANES: u32 = u32::MAX >> (32 - LANES);
 
 impl PathTracer {
     /// Samples `pixels[p].index .. + count` of each pixel `pixels[p]`:

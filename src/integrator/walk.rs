@@ -142,7 +142,8 @@ impl Walk {
         self.throughput *= s.weight;
         if mode == Transport::Radiance {
             // Undo the 1/eta² radiance takes on entering glass, as the path
-            // tracer does (see `pt::radiance`); importance does not take it.
+            // tracer does (see `CameraPath::vertex` in pt.rs); importance
+            // does not take it.
             self.roulette_scale *= s.eta * s.eta;
         }
         self.origin = offset_origin(
