@@ -52,6 +52,7 @@ impl PathTracer {
         let mut rays = [unused; LANES];
         let mut shadow_rays = [unused; LANES];
         let mut direct = [Rgb::ZERO; LANES];
+        let mut if_blocked = [Rgb::ZERO; LANES];
         let mut hits = [None; LANES];
         loop {
             let mut free = !active & ALL_LANES;
@@ -79,6 +80,7 @@ impl PathTracer {
                         Some(ray) => {
                             shadow_rays[lane] = ray;
                             direct[lane] = light.value;
+                            if_blocked[lane] = light.blocked;
                             shadowed |= 1 << lane;
                         }
                         None => path.add_direct(light.value),
@@ -89,8 +91,9 @@ impl PathTracer {
                 }
             });
             let blocked = scene.occluded_lanes(&shadow_rays, shadowed);
-            for_lanes(shadowed & !blocked, |lane| {
-                paths[lane].add_direct(direct[lane])
+            for_lanes(shadowed, |lane| {
+                let free = blocked & (1 << lane) == 0;
+                paths[lane].add_direct(if free { direct[lane] } else { if_blocked[lane] })
             });
             for_lanes(ended, |lane| out[slots[lane]] = paths[lane].radiance);
             active &= !ended;

@@ -3,10 +3,12 @@
 //! also splat light into other pixels through a [`SampleSink`].
 //!
 //! [`Integrator`] is the one interface the renderer's tile loop sees: the
-//! per-sample entry point ([`Integrator::sample`]) and the few facts the
-//! scheduler needs (whether samples splat, whether a pixel's noise is its
-//! own). Adding an estimator means a variant here and its file beside this
-//! one; `render/` never names one.
+//! per-sample entry point ([`Integrator::sample`]), the batch entry point
+//! of an estimator that takes many pixels' samples at once in lanes
+//! ([`Integrator::sample_pixels`], the path tracer's), and the few facts
+//! the scheduler needs (whether samples splat, whether a pixel's noise is
+//! its own). Adding an estimator means a variant here and its file beside
+//! this one; `render/` never names one.
 
 mod bdpt;
 mod connect;

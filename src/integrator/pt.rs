@@ -36,9 +36,10 @@ pub struct PathTracer {
 
 impl PathTracer {
     /// One sample of `pixel`: a jittered camera ray and the radiance along
-    /// it. Out of line: the renderer takes the path tracer's samples in
-    /// lanes (`lanes.rs`), and this copy inlined into the tile loop made
-    /// the other integrators' code there slower.
+    /// it. The renderer takes the path tracer's samples in lanes
+    /// (`lanes.rs`); this one-path-at-a-time form is the reference the
+    /// lanes are tested against. Out of line: inlined into the tile loop,
+    /// it made the other integrators' code there slower.
     #[inline(never)]
     pub fn sample(&self, scene: &Scene, camera: &Camera, pixel: PixelSample) -> Rgb {
         let mut path = CameraPath::start(camera, pixel);
@@ -48,6 +49,8 @@ impl PathTracer {
             if let Some(direct) = vertex.direct {
                 if direct.shadow.is_none_or(|ray| !scene.occluded(&ray)) {
                     path.add_direct(direct.value);
+                } else {
+                    path.add_direct(direct.blocked);
                 }
             }
             if !vertex.continues {
@@ -96,7 +99,11 @@ pub(super) struct Vertex {
 /// that decides it (`None`: nothing can block it).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct DirectLight {
+    /// What the light sample adds if its shadow ray is free.
     pub value: Rgb,
+    /// What it adds if the shadow ray is blocked: the throughput times
+    /// zero (see `CameraPath::vertex`).
+    pub blocked: Rgb,
     pub shadow: Option<Ray>,
 }
 
@@ -121,7 +128,7 @@ impl CameraPath {
         }
     }
 
-    /// Adds the direct light of a vertex whose shadow ray came back free.
+    /// Adds a vertex's direct light once its shadow ray is traced.
     #[inline(always)]
     pub fn add_direct(&mut self, value: Rgb) {
         self.radiance += value;
@@ -168,24 +175,30 @@ impl CameraPath {
         }
 
         let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
-        // The numbers are drawn in the order they always were (the light
-        // sample's, then the BSDF's), but the next direction is sampled
-        // before the shadow ray is traced, so that its chain of dependent
-        // divisions and square roots can run while the shadow ray is
-        // traversed (see `Walk::follow` for what that measured). Tracing
-        // the next closest hit before the shadow ray as well was slower.
+        // The light sample's numbers are drawn before the BSDF's, as they
+        // always were. The shadow ray is the caller's to trace: a single
+        // path traces it after this step, so the next direction's chain of
+        // divisions and square roots runs while it is traversed (see
+        // `Walk::follow` for what that measured); the lanes trace sixteen
+        // paths' shadow rays together.
         let light_numbers =
             (!bsdf.is_delta()).then(|| (self.sampler.next_1d(), self.sampler.next_2d()));
         let sampled = sample_direction(&bsdf, wo, &mut self.sampler, Transport::Radiance);
         let mut direct = None;
         if let Some((u_select, u_point)) = light_numbers {
-            if let Some((value, shadow)) =
-                direct_light(scene, &surface, &bsdf, wo, u_select, u_point)
-            {
-                direct = Some(DirectLight {
-                    value: self.throughput * value,
-                    shadow,
-                });
+            // A light sample that adds nothing still adds throughput × 0:
+            // zero, unless the throughput has overflowed, when it makes
+            // the sample NaN, and the renderer discards it.
+            let nothing = self.throughput * Rgb::ZERO;
+            match direct_light(scene, &surface, &bsdf, wo, u_select, u_point) {
+                Some((value, shadow)) => {
+                    direct = Some(DirectLight {
+                        value: self.throughput * value,
+                        shadow,
+                        blocked: nothing,
+                    })
+                }
+                None => self.radiance += nothing,
             }
         }
         let Some(s) = sampled else {

@@ -197,6 +197,9 @@ impl Pass<'_> {
     #[inline(never)]
     fn tile_in_lanes(&self, tile: &mut Tile) {
         let (first, count) = (self.first, self.count);
+        if count == 0 {
+            return;
+        }
         let batch = (LANE_BATCH / count as usize).max(1);
         let pixels: Vec<(u32, u32)> = (tile.y0..tile.y1)
             .flat_map(|y| (tile.x0..tile.x1).map(move |x| (x, y)))
@@ -217,7 +220,7 @@ impl Pass<'_> {
             for (&(x, y), pixel) in chunk.iter().zip(estimates.chunks(count as usize)) {
                 // As the one-by-one loop in `tile` adds them: the same sums.
                 let mut sums = [DVec3::ZERO; 2];
-                for (index, &l) in (first..).zip(pixel) {
+                for (index, &l) in (first..first + count).zip(pixel) {
                     if is_finite(l) {
                         sums[(index % 2) as usize] += l.as_dvec3();
                     } else {
