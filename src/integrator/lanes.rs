@@ -3,9 +3,9 @@
 //! next vertices are traced in one call, and so are their shadow rays:
 //! tracing is then work on sixteen independent rays, which the processor
 //! can overlap, where one path alone waits on each hit before it can
-//! shade, and waits on its shading before it can trace again. A lane whose path ends takes the
-//! next path at once (path regeneration), so lanes stay busy however
-//! unequal the paths' lengths.
+//! shade, and on its shading before it can trace again. A lane whose path
+//! ends takes the next path at once (path regeneration), so lanes stay
+//! busy however unequal the paths' lengths.
 //!
 //! Every path is a pure function of its pixel and sample index, and its
 //! estimate lands in its own slot, so the image is the one-path-at-a-time

@@ -191,9 +191,9 @@ impl Pass<'_> {
 impl Pass<'_> {
     /// `tile`'s samples of this pass, taken by the integrator a batch of
     /// pixels at a time (see [`Integrator::sample_pixels`]). Out of line,
-    /// so that `tile`, where the other integrators' code is inlined, is
-    /// compiled as it was without it: inlined, it cost the light tracer
-    /// 6% of its speed.
+    /// so that `tile`, where the other integrators' code is inlined, keeps
+    /// the shape it had before the lanes (see docs/benchmarks.md, "Paths
+    /// in lanes").
     #[inline(never)]
     fn tile_in_lanes(&self, tile: &mut Tile) {
         let (first, count) = (self.first, self.count);
