@@ -20,9 +20,7 @@ use super::light_path::{camera_splat, follow_light_walk};
 use super::mis::mis;
 use super::sink::SampleSink;
 use super::vcm::LightPass;
-use super::walk::{
-    light_paths_per_pass, sample_direction, start_light_walk, LightVertex, MergeWeights, Walk,
-};
+use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, MergeWeights, Walk};
 use super::{PixelSample, ThreadState};
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
@@ -152,7 +150,6 @@ impl Bidirectional {
             sink.record(s, t, pixel, unweighted, weight);
         };
         loop {
-            sampler.start_vertex();
             let ray = Ray::new(walk.origin, walk.dir);
             let Some(hit) = scene.intersect(&ray) else {
                 if scene.environment.is_some() {
@@ -184,9 +181,9 @@ impl Bidirectional {
             // The numbers in their usual order (the light sample's, then the
             // BSDF's), the next direction before the shadow rays (see
             // `Walk::follow`).
-            let light_numbers = (!bsdf.is_delta()).then(|| (sampler.next_1d(), sampler.next_2d()));
-            let sampled = sample_direction(&bsdf, wo, sampler, Transport::Radiance);
-            if let Some((u_select, u_point)) = light_numbers {
+            let numbers = sampler.vertex_numbers(!bsdf.is_delta());
+            let sampled = bsdf.sample(wo, numbers.direction, numbers.lobe, Transport::Radiance);
+            if let Some((u_select, u_point)) = numbers.light {
                 let (l, weight) =
                     light_sample(scene, &surface, &bsdf, wo, &walk, u_select, u_point);
                 add(&mut result, (walk.throughput * l, weight), 1, t, sink);
@@ -202,7 +199,14 @@ impl Bidirectional {
                     result += walk.throughput * pass.merge(&surface, &bsdf, wo, &walk, max_depth);
                 }
             }
-            if !walk.follow(sampled, &bsdf, &surface, wo, sampler, Transport::Radiance) {
+            if !walk.follow(
+                sampled,
+                &bsdf,
+                &surface,
+                wo,
+                numbers.roulette,
+                Transport::Radiance,
+            ) {
                 break;
             }
             walk.length += 1;

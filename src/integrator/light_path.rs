@@ -3,7 +3,7 @@
 //! they differ only in what they do at each vertex.
 
 use super::connect::{visible, CameraConnection, Endpoint};
-use super::walk::{sample_direction, LightVertex, Walk};
+use super::walk::{LightVertex, Walk};
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
 use crate::geometry::Ray;
@@ -42,12 +42,9 @@ pub fn follow_light_walk(
         let goes_on = walk.length + 2 <= max_depth;
         // The next direction before the visit's shadow ray (see `Walk::follow`);
         // the visit draws no numbers, so they are the same either way.
-        let sampled = if goes_on {
-            sampler.start_vertex();
-            sample_direction(&bsdf, wo, sampler, Transport::Importance)
-        } else {
-            None
-        };
+        let numbers = goes_on.then(|| sampler.vertex_numbers(false));
+        let sampled =
+            numbers.and_then(|n| bsdf.sample(wo, n.direction, n.lobe, Transport::Importance));
 
         if !bsdf.is_delta() {
             visit(&LightVertex {
@@ -61,7 +58,17 @@ pub fn follow_light_walk(
                 d_vm: walk.d_vm,
             });
         }
-        if !goes_on || !walk.follow(sampled, &bsdf, &surface, wo, sampler, Transport::Importance) {
+        let Some(numbers) = numbers else {
+            break;
+        };
+        if !walk.follow(
+            sampled,
+            &bsdf,
+            &surface,
+            wo,
+            numbers.roulette,
+            Transport::Importance,
+        ) {
             break;
         }
         walk.length += 1;

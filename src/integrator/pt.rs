@@ -12,7 +12,6 @@
 
 use super::connect::{sample_lens, shadow_ray};
 use super::mis::power_heuristic;
-use super::walk::sample_direction;
 use super::PixelSample;
 use super::ROULETTE_START;
 use crate::bvh::Hit;
@@ -142,7 +141,6 @@ impl CameraPath {
             direct: None,
             continues: false,
         };
-        self.sampler.start_vertex();
         let Some(hit) = hit else {
             if scene.environment.is_some() {
                 self.radiance += self.throughput
@@ -175,17 +173,15 @@ impl CameraPath {
         }
 
         let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
-        // The light sample's numbers are drawn before the BSDF's, as they
-        // always were. The shadow ray is the caller's to trace: a single
-        // path traces it after this step, so the next direction's chain of
-        // divisions and square roots runs while it is traversed (see
-        // `Walk::follow` for what that measured); the lanes trace sixteen
-        // paths' shadow rays together.
-        let light_numbers =
-            (!bsdf.is_delta()).then(|| (self.sampler.next_1d(), self.sampler.next_2d()));
-        let sampled = sample_direction(&bsdf, wo, &mut self.sampler, Transport::Radiance);
+        // The shadow ray is the caller's to trace: a single path traces it
+        // after this step, so the next direction's chain of divisions and
+        // square roots runs while it is traversed (see `Walk::follow` for
+        // what that measured); the lanes trace sixteen paths' shadow rays
+        // together.
+        let numbers = self.sampler.vertex_numbers(!bsdf.is_delta());
+        let sampled = bsdf.sample(wo, numbers.direction, numbers.lobe, Transport::Radiance);
         let mut direct = None;
-        if let Some((u_select, u_point)) = light_numbers {
+        if let Some((u_select, u_point)) = numbers.light {
             // A light sample that adds nothing still adds throughput × 0:
             // zero, unless the throughput has overflowed, when it makes
             // the sample NaN, and the renderer discards it.
@@ -225,7 +221,7 @@ impl CameraPath {
         let mut continues = true;
         if self.segments >= ROULETTE_START {
             let survive = (self.throughput.max_element() * self.eta_squared).min(1.0);
-            if self.sampler.next_1d() >= survive {
+            if numbers.roulette >= survive {
                 continues = false;
             } else {
                 self.throughput /= survive;

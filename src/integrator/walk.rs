@@ -114,9 +114,10 @@ impl Walk {
         self.d_vm /= c;
     }
 
-    /// Continues the walk along `sampled` (from [`sample_direction`] at
-    /// `surface`), or ends it when there is none or Russian roulette (which
-    /// draws its number here) says so. The integrators sample the
+    /// Continues the walk along `sampled` (the BSDF's sample at `surface`),
+    /// or ends it when there is none or Russian roulette says so, which
+    /// compares `roulette`, the vertex's number for it (see
+    /// `Sampler::vertex_numbers`), with the survival probability. The integrators sample the
     /// direction first and follow it after their connections at the
     /// vertex, so that the sample's chain of dependent divisions and roots
     /// can run while the connections' shadow rays are traversed, rather
@@ -130,7 +131,7 @@ impl Walk {
         bsdf: &Bsdf,
         surface: &SurfacePoint,
         wo: Vec3,
-        sampler: &mut Sampler,
+        roulette: f32,
         mode: Transport,
     ) -> bool {
         let Some(s) = sampled else {
@@ -159,7 +160,7 @@ impl Walk {
         };
         if self.length >= roulette_start {
             let survive = (self.throughput.max_element() * self.roulette_scale).min(1.0);
-            if sampler.next_1d() >= survive {
+            if roulette >= survive {
                 return false;
             }
             self.throughput /= survive;
@@ -186,21 +187,6 @@ impl Walk {
             self.d_vcm = mis(1.0 / s.pdf);
         }
     }
-}
-
-/// The direction a walk leaves a vertex in: two numbers for the direction
-/// and one for the lobe, drawn from `sampler`; `None` when the BSDF gives
-/// no valid direction. See [`Walk::follow`].
-#[inline(always)]
-pub fn sample_direction(
-    bsdf: &Bsdf,
-    wo: Vec3,
-    sampler: &mut Sampler,
-    mode: Transport,
-) -> Option<BsdfSample> {
-    let u = sampler.next_2d();
-    let u_lobe = sampler.next_1d();
-    bsdf.sample(wo, u, u_lobe, mode)
 }
 
 /// One over `start`'s largest channel: a walk starting there begins

@@ -8,4 +8,4 @@ pub mod warp;
 
 pub use alias::AliasTable;
 pub use distribution::Distribution1D;
-pub use sampler::{PixelSeed, Sampler};
+pub use sampler::{PixelSeed, Sampler, VertexNumbers};

@@ -161,6 +161,19 @@ pub struct Sampler {
     used: usize,
 }
 
+/// The numbers of one path vertex (see [`Sampler::vertex_numbers`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VertexNumbers {
+    /// The light sample's: one to choose the light, two for its point.
+    pub light: Option<(f32, (f32, f32))>,
+    /// The BSDF sample's two for its direction.
+    pub direction: (f32, f32),
+    /// The BSDF sample's choice of lobe.
+    pub lobe: f32,
+    /// Russian roulette's.
+    pub roulette: f32,
+}
+
 /// The part of a sampler's scramble fixed by the render's seed and the
 /// pixel: worked out once per pixel rather than once per sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -201,10 +214,7 @@ impl Sampler {
     /// A number in [0, 1).
     pub fn next_1d(&mut self) -> f32 {
         if self.used == 8 {
-            let seeds = [self.group_seed(self.group), self.group_seed(self.group + 1)];
-            self.cached = sample_8d(self.tables, self.index_reversed, seeds);
-            self.group += 2;
-            self.used = 0;
+            self.refill();
         }
         self.used += 1;
         self.cached[self.used - 1]
@@ -216,6 +226,56 @@ impl Sampler {
             self.used += 1;
         }
         (self.next_1d(), self.next_1d())
+    }
+
+    /// All the numbers of a path vertex at once: a light sample's (if
+    /// `light`), then the BSDF sample's and roulette's. They are exactly
+    /// what `start_vertex`, then `next_1d` and `next_2d` for the light,
+    /// `next_2d` and `next_1d` for the BSDF and `next_1d` for roulette
+    /// would return, and the sampler is left where those draws leave it
+    /// (drawn or not, roulette's number is the vertex's last), but without
+    /// the bookkeeping of six draws: a vertex starts on one of the cache's
+    /// two groups, takes the light's numbers from one group and the rest
+    /// from the next, or all from one when it samples no light.
+    #[inline(always)]
+    pub fn vertex_numbers(&mut self, light: bool) -> VertexNumbers {
+        self.start_vertex();
+        let light = if light {
+            let first = if self.used == 8 {
+                self.refill();
+                0
+            } else {
+                4
+            };
+            let c = &self.cached;
+            // The light takes three numbers of its group; the fourth is
+            // skipped, as `next_2d` skips it.
+            let light = (c[first], (c[first + 1], c[first + 2]));
+            self.used = first + 4;
+            Some(light)
+        } else {
+            None
+        };
+        if self.used == 8 {
+            self.refill();
+        }
+        let [a, b, lobe, roulette] = std::array::from_fn(|i| self.cached[self.used + i]);
+        self.used += 4;
+        VertexNumbers {
+            light,
+            direction: (a, b),
+            lobe,
+            roulette,
+        }
+    }
+
+    /// Makes the next two groups, the cache's eight numbers.
+    #[inline(always)]
+    fn refill(&mut self) {
+        let seeds = [self.group_seed(self.group), self.group_seed(self.group + 1)];
+        self.cached = sample_8d(self.tables, self.index_reversed, seeds);
+        self.group += 2;
+        self.used = 0;
     }
 
     /// Starts the dimensions of a new path vertex on a fresh group, so each
@@ -243,6 +303,36 @@ mod tests {
                 let crate_4d = sobol_burley::sample_4d(index, 0, seed).map(f32::to_bits);
                 assert_eq!(ours[4 * half..4 * half + 4], crate_4d, "index {index}");
             }
+        }
+    }
+
+    /// `vertex_numbers` returns what the draws one by one return, and
+    /// leaves the sampler where they leave it, whatever the mix of
+    /// vertices with and without a light sample.
+    #[test]
+    fn vertex_numbers_are_the_draws_one_by_one() {
+        let pixel = PixelSeed::new(3, 5, 8);
+        for index in [0u64, 1, 77, 70_000] {
+            let (mut at_once, mut one_by_one) = (
+                Sampler::for_pixel(pixel, index),
+                Sampler::for_pixel(pixel, index),
+            );
+            for s in [&mut at_once, &mut one_by_one] {
+                s.next_2d();
+            }
+            for vertex in 0..40u32 {
+                let light = vertex % 3 != 1 && vertex % 7 != 5;
+                let numbers = at_once.vertex_numbers(light);
+                one_by_one.start_vertex();
+                let expected = VertexNumbers {
+                    light: light.then(|| (one_by_one.next_1d(), one_by_one.next_2d())),
+                    direction: one_by_one.next_2d(),
+                    lobe: one_by_one.next_1d(),
+                    roulette: one_by_one.next_1d(),
+                };
+                assert_eq!(numbers, expected, "index {index}, vertex {vertex}");
+            }
+            assert_eq!(at_once.next_1d(), one_by_one.next_1d());
         }
     }
 
