@@ -6,6 +6,9 @@
 //! Dimensions are drawn four at a time from a 4D Sobol sequence; each group of
 //! four gets its own scramble seed ("padding" by independent shuffles), which
 //! keeps every group well stratified without running out of dimensions.
+//! A path's start draws groups in turn (`next_1d`, `next_2d`); its vertices
+//! take groups of their own, laid out so that consecutive bounces share one
+//! (`Sampler::vertex_numbers`).
 //!
 //! Every group uses the sequence's first four dimensions, so their Sobol
 //! points (before scrambling) come from two 256-entry tables, one per byte
@@ -48,6 +51,12 @@ const GROUP_KEYS: [u32; 64] = {
     }
     keys
 };
+
+/// The first group of path vertices' numbers (see
+/// `Sampler::vertex_numbers`): the groups before it are for `next_1d` and
+/// `next_2d`, which a path draws only at its start (pixel, lens, the light
+/// path's first point and direction).
+const VERTEX_GROUPS: u32 = 8;
 
 /// The sequence length `sobol_burley` supports; later samples continue with a
 /// freshly seeded sequence.
@@ -154,11 +163,15 @@ pub struct Sampler {
     index_reversed: u32,
     /// The next group not yet in `cached`.
     group: u32,
-    /// Two groups, made together: a path vertex nearly always draws from
-    /// two (light sample, then BSDF sample and roulette).
+    /// Two groups, made together (eight lanes of one SIMD pass).
     cached: [f32; 8],
     /// Numbers of `cached` used or skipped; 4 is the second group's start.
     used: usize,
+    /// The path vertices whose numbers `vertex_numbers` has returned.
+    vertices: u32,
+    /// The four groups of the current pair of vertices (see
+    /// `vertex_numbers`).
+    vertex_groups: [f32; 16],
 }
 
 /// The numbers of one path vertex (see [`Sampler::vertex_numbers`]).
@@ -198,6 +211,8 @@ impl Sampler {
             group: 0,
             cached: [0.0; 8],
             used: 8,
+            vertices: 0,
+            vertex_groups: [0.0; 16],
         }
     }
 
@@ -228,44 +243,43 @@ impl Sampler {
         (self.next_1d(), self.next_1d())
     }
 
-    /// All the numbers of a path vertex at once: a light sample's (if
-    /// `light`), then the BSDF sample's and roulette's. They are exactly
-    /// what `start_vertex`, then `next_1d` and `next_2d` for the light,
-    /// `next_2d` and `next_1d` for the BSDF and `next_1d` for roulette
-    /// would return, and the sampler is left where those draws leave it
-    /// (drawn or not, roulette's number is the vertex's last), but without
-    /// the bookkeeping of six draws: a vertex starts on one of the cache's
-    /// two groups, takes the light's numbers from one group and the rest
-    /// from the next, or all from one when it samples no light.
+    /// The numbers of a path's next vertex: its light sample's (if
+    /// `light`), its BSDF sample's and its roulette's. Vertices come in
+    /// pairs (the first and second of a path, the third and fourth, ...),
+    /// and a pair takes four groups of its own, apart from those of
+    /// `next_1d` and `next_2d`:
+    ///
+    /// - the two vertices' directions, (a, b) of the first vertex and
+    ///   (a, b) of the second: one 4D Sobol point, so that a bounce and
+    ///   the next are stratified together, not only each alone;
+    /// - the first vertex's light sample (choice, then the point's two) and
+    ///   lobe choice; then the second vertex's;
+    /// - the two vertices' roulette numbers.
+    ///
+    /// Stratifying two bounces together lowered the Cornell box's `pt`
+    /// error at 64 spp by 4% against two bounces from groups of their own
+    /// (docs/benchmarks.md, "Two bounces in one group"); the pair costs the
+    /// same two refills of eight numbers as two vertices did before.
     #[inline(always)]
     pub fn vertex_numbers(&mut self, light: bool) -> VertexNumbers {
-        self.start_vertex();
-        let light = if light {
-            let first = if self.used == 8 {
-                self.refill();
-                0
-            } else {
-                4
-            };
-            let c = &self.cached;
-            // The light takes three numbers of its group; the fourth is
-            // skipped, as `next_2d` skips it.
-            let light = (c[first], (c[first + 1], c[first + 2]));
-            self.used = first + 4;
-            Some(light)
-        } else {
-            None
-        };
-        if self.used == 8 {
-            self.refill();
+        let vertex = self.vertices;
+        self.vertices += 1;
+        let second = (vertex & 1) as usize;
+        if second == 0 {
+            let g = VERTEX_GROUPS + 2 * vertex;
+            let seeds = [g, g + 1, g + 2, g + 3].map(|g| self.group_seed(g));
+            let first = sample_8d(self.tables, self.index_reversed, [seeds[0], seeds[1]]);
+            let last = sample_8d(self.tables, self.index_reversed, [seeds[2], seeds[3]]);
+            self.vertex_groups[..8].copy_from_slice(&first);
+            self.vertex_groups[8..].copy_from_slice(&last);
         }
-        let [a, b, lobe, roulette] = std::array::from_fn(|i| self.cached[self.used + i]);
-        self.used += 4;
+        let c = &self.vertex_groups;
+        let own = 4 + 4 * second;
         VertexNumbers {
-            light,
-            direction: (a, b),
-            lobe,
-            roulette,
+            light: light.then(|| (c[own], (c[own + 1], c[own + 2]))),
+            direction: (c[2 * second], c[2 * second + 1]),
+            lobe: c[own + 3],
+            roulette: c[12 + second],
         }
     }
 
@@ -278,8 +292,9 @@ impl Sampler {
         self.used = 0;
     }
 
-    /// Starts the dimensions of a new path vertex on a fresh group, so each
-    /// bounce's decisions use the same well-stratified dimensions every sample.
+    /// Starts the next draws on a fresh group, so that a step of a path's
+    /// start (a light path's first point and direction) uses the same
+    /// well-stratified dimensions every sample.
     pub fn start_vertex(&mut self) {
         // A group is only made when drawn from, so the first one here has
         // been drawn from; the second has not unless `used` is past 4.
@@ -306,33 +321,38 @@ mod tests {
         }
     }
 
-    /// `vertex_numbers` returns what the draws one by one return, and
-    /// leaves the sampler where they leave it, whatever the mix of
-    /// vertices with and without a light sample.
+    /// Vertex numbers follow the layout `vertex_numbers` describes, in
+    /// groups of their own whatever else the sampler draws.
     #[test]
-    fn vertex_numbers_are_the_draws_one_by_one() {
+    fn vertex_numbers_follow_their_layout() {
         let pixel = PixelSeed::new(3, 5, 8);
         for index in [0u64, 1, 77, 70_000] {
-            let (mut at_once, mut one_by_one) = (
-                Sampler::for_pixel(pixel, index),
-                Sampler::for_pixel(pixel, index),
-            );
-            for s in [&mut at_once, &mut one_by_one] {
-                s.next_2d();
-            }
+            let mut sampler = Sampler::for_pixel(pixel, index);
+            let block = (index / SEQUENCE_LENGTH as u64) as u32;
+            let seed = hash_combine(pixel.0, block);
+            let i = (index % SEQUENCE_LENGTH as u64) as u32;
+            let group = |g: u32| sobol_burley::sample_4d(i, 0, hash_combine(seed, g));
+            assert_eq!(<[f32; 2]>::from(sampler.next_2d()), group(0)[..2]);
+            // 40 vertices: past the groups whose keys are precomputed.
             for vertex in 0..40u32 {
-                let light = vertex % 3 != 1 && vertex % 7 != 5;
-                let numbers = at_once.vertex_numbers(light);
-                one_by_one.start_vertex();
+                let light = vertex % 3 != 1;
+                let numbers = sampler.vertex_numbers(light);
+                let base = VERTEX_GROUPS + 4 * (vertex / 2);
+                let second = (vertex % 2) as usize;
+                let directions = group(base);
+                let own = group(base + 1 + second as u32);
                 let expected = VertexNumbers {
-                    light: light.then(|| (one_by_one.next_1d(), one_by_one.next_2d())),
-                    direction: one_by_one.next_2d(),
-                    lobe: one_by_one.next_1d(),
-                    roulette: one_by_one.next_1d(),
+                    light: light.then_some((own[0], (own[1], own[2]))),
+                    direction: (directions[2 * second], directions[2 * second + 1]),
+                    lobe: own[3],
+                    roulette: group(base + 3)[second],
                 };
                 assert_eq!(numbers, expected, "index {index}, vertex {vertex}");
+                // Draws in between take their own groups.
+                if vertex % 5 == 0 {
+                    sampler.next_1d();
+                }
             }
-            assert_eq!(at_once.next_1d(), one_by_one.next_1d());
         }
     }
 
