@@ -178,9 +178,8 @@ impl Bidirectional {
                 break;
             }
             let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
-            // The numbers in their usual order (the light sample's, then the
-            // BSDF's), the next direction before the shadow rays (see
-            // `Walk::follow`).
+            // The vertex's numbers (see `Sampler::vertex_numbers`), and the
+            // next direction before the shadow rays (see `Walk::follow`).
             let numbers = sampler.vertex_numbers(!bsdf.is_delta());
             let sampled = bsdf.sample(wo, numbers.direction, numbers.lobe, Transport::Radiance);
             if let Some((u_select, u_point)) = numbers.light {

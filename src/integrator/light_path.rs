@@ -42,7 +42,7 @@ pub fn follow_light_walk(
         let goes_on = walk.length + 2 <= max_depth;
         // The next direction before the visit's shadow ray (see `Walk::follow`);
         // the visit draws no numbers, so they are the same either way.
-        let numbers = goes_on.then(|| sampler.vertex_numbers(false));
+        let numbers = goes_on.then(|| sampler.walk_numbers());
         let sampled =
             numbers.and_then(|n| bsdf.sample(wo, n.direction, n.lobe, Transport::Importance));
 

@@ -117,14 +117,14 @@ impl Walk {
     /// Continues the walk along `sampled` (the BSDF's sample at `surface`),
     /// or ends it when there is none or Russian roulette says so, which
     /// compares `roulette`, the vertex's number for it (see
-    /// `Sampler::vertex_numbers`), with the survival probability. The integrators sample the
-    /// direction first and follow it after their connections at the
-    /// vertex, so that the sample's chain of dependent divisions and roots
-    /// can run while the connections' shadow rays are traversed, rather
-    /// than after them on the way to the next closest hit: the Cornell box
-    /// renders 1.07x (`pt`) and 1.05x (`lt`, `bdpt`) the samples per second
-    /// with the same images (docs/benchmarks.md, "The next direction
-    /// sampled before the shadow rays").
+    /// `Sampler::vertex_numbers`), with the survival probability. The
+    /// integrators sample the direction first and follow it after their
+    /// connections at the vertex, so that the sample's chain of dependent
+    /// divisions and roots can run while the connections' shadow rays are
+    /// traversed, rather than after them on the way to the next closest
+    /// hit: the Cornell box renders 1.07x (`pt`) and 1.05x (`lt`, `bdpt`)
+    /// the samples per second with the same images (docs/benchmarks.md,
+    /// "The next direction sampled before the shadow rays").
     pub fn follow(
         &mut self,
         sampled: Option<BsdfSample>,

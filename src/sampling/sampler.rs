@@ -52,10 +52,10 @@ const GROUP_KEYS: [u32; 64] = {
     keys
 };
 
-/// The first group of path vertices' numbers (see
+/// The first group of camera path vertices' numbers (see
 /// `Sampler::vertex_numbers`): the groups before it are for `next_1d` and
-/// `next_2d`, which a path draws only at its start (pixel, lens, the light
-/// path's first point and direction).
+/// `next_2d`, which a camera path draws only at its start (pixel, lens).
+/// Light walks draw all their numbers in turn, from a sampler of their own.
 const VERTEX_GROUPS: u32 = 8;
 
 /// The sequence length `sobol_burley` supports; later samples continue with a
@@ -283,6 +283,26 @@ impl Sampler {
         }
     }
 
+    /// The numbers of a light walk's next vertex, which samples no light:
+    /// its BSDF sample's and its roulette's, from the next group of
+    /// `next_1d` and `next_2d` (three of its four). Light walks end sooner
+    /// than camera paths (roulette from their second segment), so the
+    /// pairs of `vertex_numbers` would often be half wasted on them, and
+    /// their bounces gained nothing from being paired (docs/benchmarks.md,
+    /// "Two bounces in one group").
+    #[inline(always)]
+    pub fn walk_numbers(&mut self) -> VertexNumbers {
+        self.start_vertex();
+        let direction = self.next_2d();
+        let lobe = self.next_1d();
+        VertexNumbers {
+            light: None,
+            direction,
+            lobe,
+            roulette: self.next_1d(),
+        }
+    }
+
     /// Makes the next two groups, the cache's eight numbers.
     #[inline(always)]
     fn refill(&mut self) {
@@ -292,8 +312,8 @@ impl Sampler {
         self.used = 0;
     }
 
-    /// Starts the next draws on a fresh group, so that a step of a path's
-    /// start (a light path's first point and direction) uses the same
+    /// Starts the next draws on a fresh group, so that a step of a path
+    /// (a light path's start, a light walk's vertex) uses the same
     /// well-stratified dimensions every sample.
     pub fn start_vertex(&mut self) {
         // A group is only made when drawn from, so the first one here has
@@ -353,6 +373,32 @@ mod tests {
                     sampler.next_1d();
                 }
             }
+        }
+    }
+
+    /// A light walk's vertex takes the next group's first four numbers,
+    /// as the draws one by one would.
+    #[test]
+    fn walk_numbers_are_the_draws_in_turn() {
+        let pixel = PixelSeed::new(9, 1, 2);
+        let (mut walk, mut one_by_one) =
+            (Sampler::for_pixel(pixel, 5), Sampler::for_pixel(pixel, 5));
+        for s in [&mut walk, &mut one_by_one] {
+            s.next_1d();
+        }
+        for _ in 0..20 {
+            let numbers = walk.walk_numbers();
+            one_by_one.start_vertex();
+            let (direction, lobe, roulette) = (
+                one_by_one.next_2d(),
+                one_by_one.next_1d(),
+                one_by_one.next_1d(),
+            );
+            assert_eq!(numbers.light, None);
+            assert_eq!(
+                (numbers.direction, numbers.lobe, numbers.roulette),
+                (direction, lobe, roulette)
+            );
         }
     }
 
