@@ -262,6 +262,10 @@ impl Sampler {
     /// same two refills of eight numbers as two vertices did before.
     #[inline(always)]
     pub fn vertex_numbers(&mut self, light: bool) -> VertexNumbers {
+        debug_assert!(
+            self.group <= VERTEX_GROUPS,
+            "a path that draws its numbers in turn past its start cannot also take vertex groups"
+        );
         let vertex = self.vertices;
         self.vertices += 1;
         let second = (vertex & 1) as usize;
@@ -306,6 +310,12 @@ impl Sampler {
     /// Makes the next two groups, the cache's eight numbers.
     #[inline(always)]
     fn refill(&mut self) {
+        // A camera path's vertex groups start at `VERTEX_GROUPS`: draws in
+        // turn must not reach them, or two uses would share dimensions.
+        debug_assert!(
+            self.vertices == 0 || self.group + 2 <= VERTEX_GROUPS,
+            "draws in turn reached the vertices' groups"
+        );
         let seeds = [self.group_seed(self.group), self.group_seed(self.group + 1)];
         self.cached = sample_8d(self.tables, self.index_reversed, seeds);
         self.group += 2;
@@ -373,6 +383,19 @@ mod tests {
                     sampler.next_1d();
                 }
             }
+        }
+    }
+
+    /// A camera path's draws in turn stop short of its vertices' groups.
+    #[test]
+    #[cfg(debug_assertions)]
+    #[should_panic(expected = "reached the vertices' groups")]
+    fn draws_in_turn_cannot_reach_vertex_groups() {
+        let mut sampler = Sampler::for_pixel(PixelSeed::new(1, 2, 3), 4);
+        sampler.vertex_numbers(true);
+        // The groups before the vertices' hold 4 x VERTEX_GROUPS numbers.
+        for _ in 0..=4 * VERTEX_GROUPS {
+            sampler.next_1d();
         }
     }
 
