@@ -6,9 +6,10 @@
 //! Dimensions are drawn four at a time from a 4D Sobol sequence; each group of
 //! four gets its own scramble seed ("padding" by independent shuffles), which
 //! keeps every group well stratified without running out of dimensions.
-//! A path's start draws groups in turn (`next_1d`, `next_2d`); its vertices
-//! take groups of their own, laid out so that consecutive bounces share one
-//! (`Sampler::vertex_numbers`).
+//! A camera path's start draws groups in turn (`next_1d`, `next_2d`); its
+//! vertices take groups of their own, laid out so that consecutive bounces
+//! share one (`Sampler::vertex_numbers`). A light walk draws all its
+//! numbers in turn (`Sampler::walk_numbers`).
 //!
 //! Every group uses the sequence's first four dimensions, so their Sobol
 //! points (before scrambling) come from two 256-entry tables, one per byte
@@ -243,7 +244,7 @@ impl Sampler {
         (self.next_1d(), self.next_1d())
     }
 
-    /// The numbers of a path's next vertex: its light sample's (if
+    /// The numbers of a camera path's next vertex: its light sample's (if
     /// `light`), its BSDF sample's and its roulette's. Vertices come in
     /// pairs (the first and second of a path, the third and fourth, ...),
     /// and a pair takes four groups of its own, apart from those of
@@ -399,29 +400,26 @@ mod tests {
         }
     }
 
-    /// A light walk's vertex takes the next group's first four numbers,
-    /// as the draws one by one would.
+    /// A light walk's vertex takes the first four numbers of a fresh group
+    /// in turn: the crate's `sample_4d` for that group, whether the draws
+    /// before it ended mid-group or not.
     #[test]
-    fn walk_numbers_are_the_draws_in_turn() {
+    fn walk_numbers_take_a_fresh_group_in_turn() {
         let pixel = PixelSeed::new(9, 1, 2);
-        let (mut walk, mut one_by_one) =
-            (Sampler::for_pixel(pixel, 5), Sampler::for_pixel(pixel, 5));
-        for s in [&mut walk, &mut one_by_one] {
-            s.next_1d();
-        }
-        for _ in 0..20 {
-            let numbers = walk.walk_numbers();
-            one_by_one.start_vertex();
-            let (direction, lobe, roulette) = (
-                one_by_one.next_2d(),
-                one_by_one.next_1d(),
-                one_by_one.next_1d(),
-            );
+        let mut sampler = Sampler::for_pixel(pixel, 5);
+        let seed = hash_combine(pixel.0, 0);
+        let group = |g: u32| sobol_burley::sample_4d(5, 0, hash_combine(seed, g));
+        // A light path's start: the light's choice, then four numbers for
+        // its point and direction (groups 0 and 1).
+        sampler.next_1d();
+        sampler.next_2d();
+        sampler.next_2d();
+        for g in 2..30u32 {
+            let numbers = sampler.walk_numbers();
+            let expected = group(g);
             assert_eq!(numbers.light, None);
-            assert_eq!(
-                (numbers.direction, numbers.lobe, numbers.roulette),
-                (direction, lobe, roulette)
-            );
+            assert_eq!(numbers.direction, (expected[0], expected[1]), "group {g}");
+            assert_eq!((numbers.lobe, numbers.roulette), (expected[2], expected[3]));
         }
     }
 
