@@ -15,13 +15,14 @@
 //! BSDF vertex has `d_vcm = 0` (nothing can connect to it), and the
 //! light point seen directly (s = 1, t = 1) is left to s = 0.
 
-use super::connect::{sample_lens, visible, Endpoint};
+use super::connect::{sample_lens, segment_ray, shadow_ray, CameraConnection, Endpoint};
 use super::light_path::{camera_splat, follow_light_walk};
 use super::mis::mis;
 use super::sink::SampleSink;
 use super::vcm::LightPass;
 use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, MergeWeights, Walk};
 use super::{PixelSample, ThreadState};
+use crate::bvh::Hit;
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
 use crate::geometry::{Ray, SurfacePoint};
@@ -112,11 +113,7 @@ impl Bidirectional {
         follow_light_walk(scene, sampler, start.walk, self.max_depth, |v| {
             keep.push(*v);
             if let Some((c, value)) = camera_splat(scene, camera, lens, v, paths) {
-                let (_, reverse_pdf) = v.bsdf.pdfs(v.wo, c.dir_to_camera);
-                let cos_surface = c.dir_to_camera.dot(v.surface.geometric_normal).abs();
-                let w_light = mis(c.camera_pdf_area(cos_surface) / paths)
-                    * (merging.vm + v.d_vcm + v.d_vc * mis(reverse_pdf));
-                let weight = 1.0 / (w_light + 1.0);
+                let weight = camera_splat_weight(&c, v, paths, merging);
                 sink.emit(c.pixel, value * weight);
                 sink.record(v.length + 1, 1, c.pixel, value, weight);
             }
@@ -138,8 +135,60 @@ impl Bidirectional {
         pixel: u32,
         sink: &mut SampleSink,
     ) -> Rgb {
-        let max_depth = self.max_depth;
         let mut result = Rgb::ZERO;
+        // Each connection's shadow ray is traced at once.
+        let mut connect =
+            |ray: Option<Ray>, share: Share, result: &mut Rgb, sink: &mut SampleSink| {
+                let free = ray.is_none_or(|ray| !scene.occluded(&ray));
+                share.add(free, result, pixel, sink);
+            };
+        loop {
+            let hit = scene.intersect(&Ray::new(walk.origin, walk.dir));
+            let vertex = CameraVertex {
+                scene,
+                light_vertices,
+                merges,
+                pixel,
+            };
+            if !self.camera_vertex::<MERGE>(
+                vertex,
+                &mut walk,
+                sampler,
+                hit,
+                &mut result,
+                sink,
+                &mut connect,
+            ) {
+                return result;
+            }
+        }
+    }
+
+    /// The vertex of the camera subpath `walk` where its ray found `hit`
+    /// (`None`: it left the scene). The strategies that need no shadow ray
+    /// (s = 0, merges) go into `result` at once; those that do (s = 1, and
+    /// a connection to each stored light vertex) go to `connect` with
+    /// their ray, in order, for the caller to trace (see [`Share`]).
+    /// Returns whether the walk goes on, along its next ray.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn camera_vertex<const MERGE: bool>(
+        &self,
+        at: CameraVertex,
+        walk: &mut Walk,
+        sampler: &mut Sampler,
+        hit: Option<Hit>,
+        result: &mut Rgb,
+        sink: &mut SampleSink,
+        connect: &mut impl FnMut(Option<Ray>, Share, &mut Rgb, &mut SampleSink),
+    ) -> bool {
+        let CameraVertex {
+            scene,
+            light_vertices,
+            merges,
+            pixel,
+        } = at;
+        let max_depth = self.max_depth;
         // Adds one strategy's share; `t` counts the camera's vertices, the pinhole included.
         let add = |result: &mut Rgb,
                    (unweighted, weight): Weighted,
@@ -149,69 +198,138 @@ impl Bidirectional {
             *result += unweighted * weight;
             sink.record(s, t, pixel, unweighted, weight);
         };
-        loop {
-            let ray = Ray::new(walk.origin, walk.dir);
-            let Some(hit) = scene.intersect(&ray) else {
-                if scene.environment.is_some() {
-                    let (le, weight) = escaped(scene, ray.dir, &walk);
-                    add(
-                        &mut result,
-                        (walk.throughput * le, weight),
-                        0,
-                        walk.length + 1,
-                        sink,
-                    );
-                }
-                break;
-            };
-            let surface = scene.surface(&hit);
-            let wo = -ray.dir;
-            walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
-            let shading = scene.shading[hit.triangle as usize];
+        let Some(hit) = hit else {
+            if scene.environment.is_some() {
+                let (le, weight) = escaped(scene, walk.dir, walk);
+                add(
+                    result,
+                    (walk.throughput * le, weight),
+                    0,
+                    walk.length + 1,
+                    sink,
+                );
+            }
+            return false;
+        };
+        let surface = scene.surface(&hit);
+        let wo = -walk.dir;
+        walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
+        let shading = scene.shading[hit.triangle as usize];
 
-            let t = walk.length + 1;
-            if shading.light != NO_LIGHT {
-                let (le, weight) = hit_emitter(scene, shading.light as usize, wo, &walk);
-                add(&mut result, (walk.throughput * le, weight), 0, t, sink);
-            }
-            if walk.length >= max_depth {
-                break;
-            }
-            let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
-            // The vertex's numbers (see `Sampler::vertex_numbers`), and the
-            // next direction before the shadow rays (see `Walk::follow`).
-            let numbers = sampler.vertex_numbers(!bsdf.is_delta());
-            let sampled = bsdf.sample(wo, numbers.direction, numbers.lobe, Transport::Radiance);
-            if let Some((u_select, u_point)) = numbers.light {
-                let (l, weight) =
-                    light_sample(scene, &surface, &bsdf, wo, &walk, u_select, u_point);
-                add(&mut result, (walk.throughput * l, weight), 1, t, sink);
-                for v in light_vertices {
-                    if v.length + 1 + walk.length > max_depth {
-                        break;
-                    }
-                    let (l, weight) = connect(scene, &surface, &bsdf, wo, &walk, v);
-                    let l = walk.throughput * v.throughput * l;
-                    add(&mut result, (l, weight), v.length + 1, t, sink);
-                }
-                if let Some(pass) = merges.filter(|_| MERGE) {
-                    result += walk.throughput * pass.merge(&surface, &bsdf, wo, &walk, max_depth);
-                }
-            }
-            if !walk.follow(
-                sampled,
-                &bsdf,
-                &surface,
-                wo,
-                numbers.roulette,
-                Transport::Radiance,
-            ) {
-                break;
-            }
-            walk.length += 1;
+        let t = walk.length + 1;
+        if shading.light != NO_LIGHT {
+            let (le, weight) = hit_emitter(scene, shading.light as usize, wo, walk);
+            add(result, (walk.throughput * le, weight), 0, t, sink);
         }
-        result
+        if walk.length >= max_depth {
+            return false;
+        }
+        let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
+        // The vertex's numbers (see `Sampler::vertex_numbers`), and the
+        // next direction before the shadow rays (see `Walk::follow`).
+        let numbers = sampler.vertex_numbers(!bsdf.is_delta());
+        let sampled = bsdf.sample(wo, numbers.direction, numbers.lobe, Transport::Radiance);
+        if let Some((u_select, u_point)) = numbers.light {
+            // A strategy that adds nothing, or whose ray is blocked, still
+            // adds the throughputs times zero: zero, unless a throughput has
+            // overflowed, when it makes the sample NaN, and the renderer
+            // discards it.
+            let (l, weight, ray) =
+                light_sample(scene, &surface, &bsdf, wo, walk, u_select, u_point);
+            let share = Share {
+                value: walk.throughput * l,
+                weight,
+                blocked: walk.throughput * Rgb::ZERO,
+                s: 1,
+                t,
+            };
+            connect(ray, share, result, sink);
+            for v in light_vertices {
+                if v.length + 1 + walk.length > max_depth {
+                    break;
+                }
+                let (l, weight, ray) = connect_vertices(&surface, &bsdf, wo, walk, v);
+                let throughput = walk.throughput * v.throughput;
+                let share = Share {
+                    value: throughput * l,
+                    weight,
+                    blocked: throughput * Rgb::ZERO,
+                    s: v.length + 1,
+                    t,
+                };
+                connect(ray, share, result, sink);
+            }
+            if let Some(pass) = merges.filter(|_| MERGE) {
+                *result += walk.throughput * pass.merge(&surface, &bsdf, wo, walk, max_depth);
+            }
+        }
+        if !walk.follow(
+            sampled,
+            &bsdf,
+            &surface,
+            wo,
+            numbers.roulette,
+            Transport::Radiance,
+        ) {
+            return false;
+        }
+        walk.length += 1;
+        true
     }
+}
+
+/// What a camera vertex reads besides its walk: the scene, the sample's
+/// light vertices, the iteration's light pass for VCM, and the pixel the
+/// sample is for.
+#[derive(Clone, Copy)]
+pub(super) struct CameraVertex<'a> {
+    pub scene: &'a Scene,
+    pub light_vertices: &'a [LightVertex],
+    pub merges: Option<&'a LightPass>,
+    pub pixel: u32,
+}
+
+/// A strategy at a camera vertex that waits on its shadow ray: what it
+/// adds if the ray is free (`value` times `weight`), and if it is blocked
+/// (`blocked`, the throughputs times zero, with weight zero), as a strategy
+/// of `s` light and `t` camera vertices.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Share {
+    value: Rgb,
+    weight: f32,
+    blocked: Rgb,
+    s: u32,
+    t: u32,
+}
+
+impl Share {
+    /// Adds the share to `result` (and records it in `sink`) once its
+    /// shadow ray is known to be `free` or not.
+    #[inline(always)]
+    pub fn add(&self, free: bool, result: &mut Rgb, pixel: u32, sink: &mut SampleSink) {
+        let (unweighted, weight) = if free {
+            (self.value, self.weight)
+        } else {
+            (self.blocked, 0.0)
+        };
+        *result += unweighted * weight;
+        sink.record(self.s, self.t, pixel, unweighted, weight);
+    }
+}
+
+/// The MIS weight of a light vertex's splat to the camera (t = 1, report eq. 44).
+#[inline(always)]
+pub(super) fn camera_splat_weight(
+    c: &CameraConnection,
+    v: &LightVertex,
+    paths: f32,
+    merging: MergeWeights,
+) -> f32 {
+    let (_, reverse_pdf) = v.bsdf.pdfs(v.wo, c.dir_to_camera);
+    let cos_surface = c.dir_to_camera.dot(v.surface.geometric_normal).abs();
+    let w_light = mis(c.camera_pdf_area(cos_surface) / paths)
+        * (merging.vm + v.d_vcm + v.d_vc * mis(reverse_pdf));
+    1.0 / (w_light + 1.0)
 }
 
 /// The first segment of a camera subpath through `pixel`, jittered by
@@ -303,7 +421,9 @@ fn escaped(scene: &Scene, dir: Vec3, walk: &Walk) -> Weighted {
 }
 
 /// s = 1: a point chosen on a light, connected to the camera vertex (eq. 44);
-/// `u_select` chooses the light, `u_point` the point on it.
+/// `u_select` chooses the light, `u_point` the point on it. Returns the
+/// estimate and its weight should the shadow ray (`None`: nothing can
+/// block it) be free; a sample that adds nothing has no ray.
 fn light_sample(
     scene: &Scene,
     surface: &SurfacePoint,
@@ -312,17 +432,18 @@ fn light_sample(
     walk: &Walk,
     u_select: f32,
     u_point: (f32, f32),
-) -> Weighted {
+) -> (Rgb, f32, Option<Ray>) {
+    const NONE: (Rgb, f32, Option<Ray>) = (Rgb::ZERO, 0.0, None);
     let Some((index, pick)) = scene.light_selector.sample(u_select) else {
-        return NOTHING;
+        return NONE;
     };
     let light = &scene.lights[index];
     let Some(sample) = light.sample_incident(surface.position, u_point) else {
-        return NOTHING;
+        return NONE;
     };
     let (f, bsdf_pdf, reverse_pdf) = bsdf.eval_pdfs(wo, sample.wi, Transport::Radiance);
     if is_black(f) {
-        return NOTHING;
+        return NONE;
     }
     let pdfs = light.pdfs_for_incident(sample.wi, sample.distance, sample.normal, sample.pdf);
     // BSDF sampling can never hit a delta light.
@@ -333,39 +454,41 @@ fn light_sample(
         * (walk.merging.vm + walk.d_vcm + walk.d_vc * mis(reverse_pdf));
     let weight = 1.0 / (w_light + 1.0 + w_camera);
     let contribution = f * sample.value / (pick * sample.pdf);
-    if is_black(contribution) || !super::connect::unoccluded(scene, surface, &sample) {
-        return NOTHING;
+    if is_black(contribution) {
+        return NONE;
     }
-    (contribution, weight)
+    (contribution, weight, shadow_ray(surface, &sample))
 }
 
 /// s > 1, t > 1: the camera vertex joined to a stored light vertex (eq. 45).
-/// Returns the contribution without the two subpaths' throughputs.
+/// Returns the contribution without the two subpaths' throughputs and its
+/// weight, should the shadow ray (`None`: nothing can block it) be free;
+/// a connection that adds nothing has no ray.
 // Always inlined: with two camera walks (BDPT's and VCM's) calling it, the
 // compiler otherwise keeps it out of line, which costs BDPT 4% (perf gate).
 #[inline(always)]
-fn connect(
-    scene: &Scene,
+fn connect_vertices(
     surface: &SurfacePoint,
     bsdf: &Bsdf,
     wo: Vec3,
     walk: &Walk,
     v: &LightVertex,
-) -> Weighted {
+) -> (Rgb, f32, Option<Ray>) {
+    const NONE: (Rgb, f32, Option<Ray>) = (Rgb::ZERO, 0.0, None);
     let to_light = v.surface.position - surface.position;
     let distance2 = to_light.length_squared();
     if distance2 <= 0.0 {
-        return NOTHING;
+        return NONE;
     }
     let distance = distance2.sqrt();
     let dir = to_light / distance;
     let (camera_f, camera_pdf, camera_reverse) = bsdf.eval_pdfs(wo, dir, Transport::Radiance);
     if is_black(camera_f) {
-        return NOTHING;
+        return NONE;
     }
     let (light_f, light_pdf, light_reverse) = v.bsdf.eval_pdfs(v.wo, -dir, Transport::Importance);
     if is_black(light_f) {
-        return NOTHING;
+        return NONE;
     }
     let cos_camera = dir.dot(surface.geometric_normal).abs();
     let cos_light = dir.dot(v.surface.geometric_normal).abs();
@@ -377,14 +500,9 @@ fn connect(
     let w_camera = mis(light_pdf_area) * (vm + walk.d_vcm + walk.d_vc * mis(camera_reverse));
     let weight = 1.0 / (w_light + 1.0 + w_camera);
     let contribution = camera_f * light_f / distance2;
-    if is_black(contribution)
-        || !visible(
-            scene,
-            Endpoint::surface(surface),
-            Endpoint::surface(&v.surface),
-        )
-    {
-        return NOTHING;
+    if is_black(contribution) {
+        return NONE;
     }
-    (contribution, weight)
+    let ray = segment_ray(Endpoint::surface(surface), Endpoint::surface(&v.surface));
+    (contribution, weight, ray)
 }

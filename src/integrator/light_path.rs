@@ -2,8 +2,9 @@
 //! t = 1 strategy). Light tracing and BDPT both walk light paths this way;
 //! they differ only in what they do at each vertex.
 
-use super::connect::{visible, CameraConnection, Endpoint};
+use super::connect::{segment_ray, visible, CameraConnection, Endpoint};
 use super::walk::{LightVertex, Walk};
+use crate::bvh::Hit;
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
 use crate::geometry::Ray;
@@ -24,55 +25,75 @@ pub fn follow_light_walk(
     max_depth: u32,
     mut visit: impl FnMut(&LightVertex),
 ) {
-    loop {
-        // A vertex here is walk.length segments from the light, and one more to the camera.
-        if walk.length + 1 > max_depth {
-            break;
-        }
-        let ray = Ray::new(walk.origin, walk.dir);
-        let Some(hit) = scene.intersect(&ray) else {
+    while looks_further(&walk, max_depth) {
+        let Some(hit) = scene.intersect(&Ray::new(walk.origin, walk.dir)) else {
             break;
         };
-        let surface = scene.surface(&hit);
-        let wo = -ray.dir;
-        walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
-        let material = &scene.materials[scene.shading[hit.triangle as usize].material as usize];
-        let bsdf = material.bsdf(&surface, wo);
-        // A further vertex would need at least one more segment to reach the camera.
-        let goes_on = walk.length + 2 <= max_depth;
-        // The next direction before the visit's shadow ray (see `Walk::follow`);
-        // the visit draws no numbers, so they are the same either way.
-        let numbers = goes_on.then(|| sampler.walk_numbers());
-        let sampled =
-            numbers.and_then(|n| bsdf.sample(wo, n.direction, n.lobe, Transport::Importance));
-
-        if !bsdf.is_delta() {
-            visit(&LightVertex {
-                surface,
-                bsdf,
-                wo,
-                throughput: walk.throughput,
-                length: walk.length,
-                d_vcm: walk.d_vcm,
-                d_vc: walk.d_vc,
-                d_vm: walk.d_vm,
-            });
-        }
-        let Some(numbers) = numbers else {
-            break;
-        };
-        if !walk.follow(
-            sampled,
-            &bsdf,
-            &surface,
-            wo,
-            numbers.roulette,
-            Transport::Importance,
-        ) {
+        if !light_vertex(scene, sampler, &mut walk, max_depth, &hit, &mut visit) {
             break;
         }
-        walk.length += 1;
     }
+}
+
+/// Whether a light walk looks for another vertex: one it reaches is
+/// `walk.length` segments from the light, and one more from the camera.
+#[inline(always)]
+pub fn looks_further(walk: &Walk, max_depth: u32) -> bool {
+    walk.length < max_depth
+}
+
+/// One vertex of a light walk, where its ray found `hit`: `visit` (which
+/// must draw no numbers from `sampler`) sees it if it is not a delta, and
+/// the walk moves on to its next ray, unless it ends there. Returns
+/// whether it goes on.
+#[inline(always)]
+pub fn light_vertex(
+    scene: &Scene,
+    sampler: &mut Sampler,
+    walk: &mut Walk,
+    max_depth: u32,
+    hit: &Hit,
+    visit: &mut impl FnMut(&LightVertex),
+) -> bool {
+    let surface = scene.surface(hit);
+    let wo = -walk.dir;
+    walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
+    let material = &scene.materials[scene.shading[hit.triangle as usize].material as usize];
+    let bsdf = material.bsdf(&surface, wo);
+    // A further vertex would need at least one more segment to reach the camera.
+    let goes_on = walk.length + 2 <= max_depth;
+    // The next direction before the visit's shadow ray (see `Walk::follow`);
+    // the visit draws no numbers, so they are the same either way.
+    let numbers = goes_on.then(|| sampler.walk_numbers());
+    let sampled = numbers.and_then(|n| bsdf.sample(wo, n.direction, n.lobe, Transport::Importance));
+
+    if !bsdf.is_delta() {
+        visit(&LightVertex {
+            surface,
+            bsdf,
+            wo,
+            throughput: walk.throughput,
+            length: walk.length,
+            d_vcm: walk.d_vcm,
+            d_vc: walk.d_vc,
+            d_vm: walk.d_vm,
+        });
+    }
+    let Some(numbers) = numbers else {
+        return false;
+    };
+    if !walk.follow(
+        sampled,
+        &bsdf,
+        &surface,
+        wo,
+        numbers.roulette,
+        Transport::Importance,
+    ) {
+        return false;
+    }
+    walk.length += 1;
+    true
 }
 
 /// A light vertex seen by the camera: where it lands, and its splat before
@@ -88,19 +109,45 @@ pub fn camera_splat(
     v: &LightVertex,
     light_paths: f32,
 ) -> Option<(CameraConnection, Rgb)> {
-    let c = CameraConnection::new(camera, lens, v.surface.position)?;
-    let f = v
-        .bsdf
-        .eval_mode(v.wo, c.dir_to_camera, Transport::Importance);
-    if is_black(f)
-        || !visible(
-            scene,
-            Endpoint::surface(&v.surface),
-            Endpoint::point(c.lens),
-        )
-    {
+    let (c, f) = camera_connection(camera, lens, v)?;
+    if !visible(
+        scene,
+        Endpoint::surface(&v.surface),
+        Endpoint::point(c.lens),
+    ) {
         return None;
     }
     let value = c.splat(v.throughput * f, light_paths);
     Some((c, value))
+}
+
+/// [`camera_splat`] with its shadow ray left to the caller: the splat
+/// should the ray (`None`: nothing can block it) be free.
+#[inline(always)]
+pub fn camera_splat_unshadowed(
+    camera: &Camera,
+    lens: Vec3,
+    v: &LightVertex,
+    light_paths: f32,
+) -> Option<(CameraConnection, Rgb, Option<Ray>)> {
+    let (c, f) = camera_connection(camera, lens, v)?;
+    let ray = segment_ray(Endpoint::surface(&v.surface), Endpoint::point(c.lens));
+    let value = c.splat(v.throughput * f, light_paths);
+    Some((c, value, ray))
+}
+
+/// The light vertex's connection to the lens point `lens`, and its BSDF
+/// value towards it; `None` where it lands outside the image or reflects
+/// nothing towards the camera.
+#[inline(always)]
+fn camera_connection(
+    camera: &Camera,
+    lens: Vec3,
+    v: &LightVertex,
+) -> Option<(CameraConnection, Rgb)> {
+    let c = CameraConnection::new(camera, lens, v.surface.position)?;
+    let f = v
+        .bsdf
+        .eval_mode(v.wo, c.dir_to_camera, Transport::Importance);
+    (!is_black(f)).then_some((c, f))
 }

@@ -11,6 +11,7 @@
 //! this one; `render/` never names one.
 
 mod bdpt;
+mod bdpt_lanes;
 mod connect;
 mod lanes;
 mod light_path;
@@ -120,6 +121,7 @@ impl PixelSample {
 #[derive(Default)]
 pub struct ThreadState {
     light_vertices: Vec<LightVertex>,
+    lanes: bdpt_lanes::LaneState,
 }
 
 impl Integrator {
@@ -198,16 +200,18 @@ impl Integrator {
 
     /// Whether the estimator takes a tile's samples many paths at a time,
     /// through [`Integrator::sample_pixels`], rather than one by one
-    /// through [`Integrator::sample`]: the path tracer, whose samples
-    /// splat nothing.
+    /// through [`Integrator::sample`]: the path tracer and BDPT.
     pub fn samples_in_lanes(&self) -> bool {
-        matches!(self, Integrator::Pt(_))
+        matches!(self, Integrator::Pt(_) | Integrator::Bdpt(_))
     }
 
     /// For an estimator that [`samples_in_lanes`](Integrator::samples_in_lanes):
     /// samples `pixels[p].index .. + count` of each pixel `pixels[p]`, the
-    /// estimate of sample `pixels[p].index + i` in `out[p * count + i]`,
-    /// the same numbers [`Integrator::sample`] gives one by one.
+    /// estimate of sample `pixels[p].index + i` in `out[p * count + i]`
+    /// and its splats in `sinks[(pixels[p].index + i) % 2]`, the same
+    /// numbers, in the same order, as [`Integrator::sample`] gives one by
+    /// one. Strategies are not recorded.
+    #[allow(clippy::too_many_arguments)]
     pub fn sample_pixels(
         &self,
         scene: &Scene,
@@ -215,10 +219,16 @@ impl Integrator {
         pixels: &[PixelSample],
         count: u32,
         out: &mut [Rgb],
+        sinks: &mut [SampleSink; 2],
+        state: &mut ThreadState,
     ) {
         match self {
             Integrator::Pt(pt) => pt.sample_pixels(scene, camera, pixels, count, out),
-            _ => unreachable!("only the path tracer samples in lanes"),
+            Integrator::Bdpt(bdpt) => {
+                let lanes = &mut state.lanes;
+                bdpt.sample_pixels(scene, camera, pixels, count, out, sinks, lanes)
+            }
+            _ => unreachable!("only the path tracer and BDPT sample in lanes"),
         }
     }
 

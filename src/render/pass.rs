@@ -152,8 +152,10 @@ impl Pass<'_> {
         };
         let mut sinks = [sink(), sink()];
         let mut state = ThreadState::default();
-        if self.integrator.samples_in_lanes() {
-            self.tile_in_lanes(tile);
+        // The lanes record no strategies: a pass that keeps them takes its
+        // samples one by one, the same samples.
+        if self.integrator.samples_in_lanes() && !self.keep_strategies {
+            self.tile_in_lanes(tile, &mut sinks, &mut state);
         } else {
             for y in tile.y0..tile.y1 {
                 for x in tile.x0..tile.x1 {
@@ -195,7 +197,7 @@ impl Pass<'_> {
     /// the shape it had before the lanes (see docs/benchmarks.md, "Paths
     /// in lanes").
     #[inline(never)]
-    fn tile_in_lanes(&self, tile: &mut Tile) {
+    fn tile_in_lanes(&self, tile: &mut Tile, sinks: &mut [SampleSink; 2], state: &mut ThreadState) {
         let (first, count) = (self.first, self.count);
         if count == 0 {
             return;
@@ -215,8 +217,15 @@ impl Pass<'_> {
             );
             estimates.clear();
             estimates.resize(chunk.len() * count as usize, Rgb::ZERO);
-            self.integrator
-                .sample_pixels(self.scene, self.camera, &samples, count, &mut estimates);
+            self.integrator.sample_pixels(
+                self.scene,
+                self.camera,
+                &samples,
+                count,
+                &mut estimates,
+                sinks,
+                state,
+            );
             for (&(x, y), pixel) in chunk.iter().zip(estimates.chunks(count as usize)) {
                 // As the one-by-one loop in `tile` adds them: the same sums.
                 let mut sums = [DVec3::ZERO; 2];

@@ -172,8 +172,18 @@ fn paths_in_lanes_are_the_paths_one_by_one() {
             .collect();
         let count = 37;
         let mut in_lanes = vec![Rgb::ZERO; pixels.len() * count as usize];
-        integrator.sample_pixels(&scene, &camera, &pixels, count, &mut in_lanes);
-        let (mut state, mut sink) = (ThreadState::default(), SampleSink::default());
+        let mut sinks = [SampleSink::default(), SampleSink::default()];
+        let mut state = ThreadState::default();
+        integrator.sample_pixels(
+            &scene,
+            &camera,
+            &pixels,
+            count,
+            &mut in_lanes,
+            &mut sinks,
+            &mut state,
+        );
+        let mut sink = SampleSink::default();
         let alone: Vec<Rgb> = pixels
             .iter()
             .flat_map(|p| (0..count as u64).map(move |i| p.with_index(p.index + i)))
@@ -188,5 +198,86 @@ fn paths_in_lanes_are_the_paths_one_by_one() {
         }
         let lit = alone.iter().filter(|c| c.max_element() > 0.0).count();
         assert!(lit > alone.len() / 4, "{path}: only {lit} lit samples");
+    }
+}
+
+/// BDPT takes a tile's samples sixteen at a time, their rays traced
+/// together: every sample's estimate must be the one it gives alone, bit
+/// for bit, and the splats must reach each half's sink as one sample after
+/// another would push them, value for value and in the same order.
+#[test]
+fn bdpt_samples_in_lanes_are_the_samples_one_by_one() {
+    use tracer::color::Rgb;
+    use tracer::integrator::{Integrator, PixelSample, SampleSink, ThreadState};
+    use tracer::settings::IntegratorKind;
+    for path in [
+        "scenes/cornell-box.json",
+        "scenes/cornell-caustics.json",
+        "scenes/mirror-caustic.json",
+        "scenes/lights.json",
+        "scenes/textured.json",
+        "scenes/rough-materials.json",
+        "scenes/sky-materials.json",
+    ] {
+        let (scene, mut settings) = common::load_scene(path);
+        settings.integrator = IntegratorKind::Bdpt;
+        let integrator = Integrator::new(&settings);
+        assert!(integrator.samples_in_lanes());
+        let camera = settings.camera().unwrap();
+        let (w, h) = (settings.film.width, settings.film.height);
+        // 37 samples per pixel: not a multiple of the lanes, and from an
+        // odd first index, so both halves get samples from every batch.
+        let pixels: Vec<PixelSample> = (0..23u32)
+            .map(|k| PixelSample::new(k * 97 % w, k * 61 % h, 5, 17))
+            .collect();
+        let count = 37;
+        let mut in_lanes = vec![Rgb::ZERO; pixels.len() * count as usize];
+        let mut lane_sinks = [SampleSink::default(), SampleSink::default()];
+        let mut state = ThreadState::default();
+        integrator.sample_pixels(
+            &scene,
+            &camera,
+            &pixels,
+            count,
+            &mut in_lanes,
+            &mut lane_sinks,
+            &mut state,
+        );
+        let mut sinks = [SampleSink::default(), SampleSink::default()];
+        let mut alone = Vec::new();
+        for p in &pixels {
+            for i in 0..count as u64 {
+                let sample = p.with_index(p.index + i);
+                let sink = &mut sinks[(sample.index % 2) as usize];
+                alone.push(integrator.sample(&scene, &camera, sample, &mut state, sink, None));
+            }
+        }
+        let bits = |c: &Rgb| c.to_array().map(f32::to_bits);
+        if let Some(k) = (0..alone.len()).find(|&k| bits(&in_lanes[k]) != bits(&alone[k])) {
+            panic!(
+                "{path}: sample {k} is {} in lanes, {} alone",
+                in_lanes[k], alone[k]
+            );
+        }
+        for (half, (lanes, one_by_one)) in lane_sinks.iter().zip(&sinks).enumerate() {
+            let splats = |sink: &SampleSink| -> Vec<(u32, [u32; 3])> {
+                sink.splats
+                    .iter()
+                    .map(|s| (s.pixel, bits(&s.value)))
+                    .collect()
+            };
+            assert_eq!(lanes.discarded, one_by_one.discarded, "{path}: half {half}");
+            assert!(
+                splats(lanes) == splats(one_by_one),
+                "{path}: half {half}: {} splats in lanes, {} alone, or in another order",
+                lanes.splats.len(),
+                one_by_one.splats.len()
+            );
+        }
+        let lit = alone.iter().filter(|c| c.max_element() > 0.0).count();
+        assert!(lit > alone.len() / 4, "{path}: only {lit} lit samples");
+        let splatted = sinks[0].splats.len() + sinks[1].splats.len();
+        // Open scenes lose most light paths to the sky: a few splats there.
+        assert!(splatted >= 20, "{path}: only {splatted} splats");
     }
 }

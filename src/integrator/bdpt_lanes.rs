@@ -1,0 +1,249 @@
+//! Bidirectional path tracing sixteen samples at a time, as the path tracer
+//! takes its paths (`lanes.rs`): the sixteen light walks step together, their
+//! rays to the next vertices traced in one call and their splats' shadow
+//! rays in another; then the sixteen camera walks, each step's closest hits
+//! traced together and then every lane's connections. Tracing is then work
+//! on many independent rays in a row, which the processor overlaps, where
+//! one sample alone waits on each ray before it can shade.
+//!
+//! Each sample draws the same numbers and does the same arithmetic as
+//! alone ([`Bidirectional::sample`]): its estimate is the same bit for bit,
+//! its strategies add up in the same order, and its splats reach the sinks
+//! in the order one sample after another would emit them (a test checks
+//! all three).
+
+use super::bdpt::{camera_splat_weight, start_camera_walk, Bidirectional, CameraVertex, Share};
+use super::connect::sample_lens;
+use super::light_path::{camera_splat_unshadowed, light_vertex, looks_further};
+use super::sink::SampleSink;
+use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, MergeWeights, Walk};
+use super::PixelSample;
+use crate::bvh::{for_lanes, Hit, LANES};
+use crate::camera::Camera;
+use crate::color::Rgb;
+use crate::geometry::Ray;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// What the lanes keep from sample to sample: each lane's light vertices
+/// and splats, and the connections waiting on their shadow rays.
+#[derive(Default)]
+pub struct LaneState {
+    vertices: [Vec<LightVertex>; LANES],
+    splats: [Vec<(u32, Rgb)>; LANES],
+    connections: Vec<(usize, Option<Ray>, Share)>,
+}
+
+impl Bidirectional {
+    /// Samples `pixels[p].index .. + count` of each pixel `pixels[p]`:
+    /// `out[p * count + i]` gets what [`Bidirectional::sample`] returns for
+    /// sample `pixels[p].index + i`, and `sinks[index % 2]` the splats it
+    /// pushes, in the same order. Strategies are not recorded.
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample_pixels(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        pixels: &[PixelSample],
+        count: u32,
+        out: &mut [Rgb],
+        sinks: &mut [SampleSink; 2],
+        state: &mut LaneState,
+    ) {
+        let count = count as usize;
+        let total = pixels.len() * count;
+        assert_eq!(out.len(), total, "one slot per sample");
+        for first in (0..total).step_by(LANES) {
+            let n = LANES.min(total - first);
+            let samples: [PixelSample; LANES] = std::array::from_fn(|k| {
+                let slot = first + k.min(n - 1);
+                let pixel = pixels[slot / count];
+                pixel.with_index(pixel.index + (slot % count) as u64)
+            });
+            let mut camera_samplers = samples.map(|s| s.camera_sampler());
+            // Drawn first, as `Bidirectional::sample` does.
+            let jitters: [(f32, f32); LANES] =
+                std::array::from_fn(|k| camera_samplers[k].next_2d());
+            self.light_walks(scene, camera, &samples[..n], state);
+            for (k, sample) in samples[..n].iter().enumerate() {
+                let sink = &mut sinks[(sample.index % 2) as usize];
+                for (pixel, value) in state.splats[k].drain(..) {
+                    sink.emit(pixel, value);
+                }
+            }
+            let estimates = self.camera_walks(
+                scene,
+                camera,
+                &samples[..n],
+                &mut camera_samplers,
+                jitters,
+                state,
+            );
+            out[first..first + n].copy_from_slice(&estimates[..n]);
+        }
+    }
+
+    /// The light walks of `samples`, one per lane: each lane's vertices
+    /// into `state.vertices`, its splats into `state.splats` (see
+    /// `Bidirectional::trace_light_path`, which this takes in lanes).
+    fn light_walks(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        samples: &[PixelSample],
+        state: &mut LaneState,
+    ) {
+        let max_depth = self.max_depth;
+        let paths = light_paths_per_pass(camera);
+        let mut samplers: [Sampler; LANES] =
+            std::array::from_fn(|k| samples[k.min(samples.len() - 1)].light_sampler());
+        let mut walks = [IDLE; LANES];
+        let mut lens = [Vec3::ZERO; LANES];
+        let mut active = 0u32;
+        for k in 0..samples.len() {
+            state.vertices[k].clear();
+            let sampler = &mut samplers[k];
+            sampler.start_vertex();
+            if let Some(start) = start_light_walk(scene, sampler, MergeWeights::NONE) {
+                lens[k] = sample_lens(camera, sampler);
+                walks[k] = start.walk;
+                if looks_further(&walks[k], max_depth) {
+                    active |= 1 << k;
+                }
+            }
+        }
+        let unused = Ray::new(Vec3::ZERO, Vec3::Z);
+        let mut rays = [unused; LANES];
+        let mut hits: [Option<Hit>; LANES] = [None; LANES];
+        let mut shadow_rays = [unused; LANES];
+        // A lane's splat waiting on its shadow ray: at most one per step.
+        let mut waiting = [(0u32, Rgb::ZERO); LANES];
+        while active != 0 {
+            for_lanes(active, |k| {
+                rays[k] = Ray::new(walks[k].origin, walks[k].dir)
+            });
+            scene.intersect_lanes(&rays, active, &mut hits);
+            let (mut shadowed, mut going_on) = (0u32, 0u32);
+            for_lanes(active, |k| {
+                let Some(hit) = hits[k] else {
+                    return;
+                };
+                let (vertices, splats) = (&mut state.vertices[k], &mut state.splats[k]);
+                let mut visit = |v: &LightVertex| {
+                    vertices.push(*v);
+                    let Some((c, value, ray)) = camera_splat_unshadowed(camera, lens[k], v, paths)
+                    else {
+                        return;
+                    };
+                    let weighted = value * camera_splat_weight(&c, v, paths, MergeWeights::NONE);
+                    match ray {
+                        Some(ray) => {
+                            shadow_rays[k] = ray;
+                            waiting[k] = (c.pixel, weighted);
+                            shadowed |= 1 << k;
+                        }
+                        None => splats.push((c.pixel, weighted)),
+                    }
+                };
+                let sampler = &mut samplers[k];
+                if light_vertex(scene, sampler, &mut walks[k], max_depth, &hit, &mut visit)
+                    && looks_further(&walks[k], max_depth)
+                {
+                    going_on |= 1 << k;
+                }
+            });
+            let blocked = scene.occluded_lanes(&shadow_rays, shadowed);
+            for_lanes(shadowed & !blocked, |k| state.splats[k].push(waiting[k]));
+            active = going_on;
+        }
+    }
+
+    /// The camera walks of `samples`, one per lane, each connecting to its
+    /// lane's light vertices (see `Bidirectional::trace_camera_path`, which
+    /// this takes in lanes); returns each lane's estimate.
+    fn camera_walks(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        samples: &[PixelSample],
+        samplers: &mut [Sampler; LANES],
+        jitters: [(f32, f32); LANES],
+        state: &mut LaneState,
+    ) -> [Rgb; LANES] {
+        let mut results = [Rgb::ZERO; LANES];
+        let mut walks = [IDLE; LANES];
+        let mut pixels = [0u32; LANES];
+        let mut active = 0u32;
+        for (k, &sample) in samples.iter().enumerate() {
+            let start = start_camera_walk(
+                camera,
+                &mut samplers[k],
+                sample,
+                jitters[k],
+                MergeWeights::NONE,
+            );
+            if let Some((walk, pixel)) = start {
+                (walks[k], pixels[k]) = (walk, pixel);
+                active |= 1 << k;
+            }
+        }
+        // Strategies are not recorded here: a sink that keeps none.
+        let mut no_records = SampleSink::default();
+        let unused = Ray::new(Vec3::ZERO, Vec3::Z);
+        let mut rays = [unused; LANES];
+        let mut hits: [Option<Hit>; LANES] = [None; LANES];
+        let connections = &mut state.connections;
+        while active != 0 {
+            for_lanes(active, |k| {
+                rays[k] = Ray::new(walks[k].origin, walks[k].dir)
+            });
+            scene.intersect_lanes(&rays, active, &mut hits);
+            let mut going_on = 0u32;
+            connections.clear();
+            for_lanes(active, |k| {
+                let at = CameraVertex {
+                    scene,
+                    light_vertices: &state.vertices[k],
+                    merges: None,
+                    pixel: pixels[k],
+                };
+                let mut wait = |ray: Option<Ray>, share: Share, _: &mut Rgb, _: &mut SampleSink| {
+                    connections.push((k, ray, share))
+                };
+                if self.camera_vertex::<false>(
+                    at,
+                    &mut walks[k],
+                    &mut samplers[k],
+                    hits[k],
+                    &mut results[k],
+                    &mut no_records,
+                    &mut wait,
+                ) {
+                    going_on |= 1 << k;
+                }
+            });
+            for &(k, ray, share) in connections.iter() {
+                let free = ray.is_none_or(|ray| !scene.occluded(&ray));
+                share.add(free, &mut results[k], pixels[k], &mut no_records);
+            }
+            active = going_on;
+        }
+        results
+    }
+}
+
+/// A lane's walk before it has one; never traced.
+const IDLE: Walk = Walk {
+    origin: Vec3::ZERO,
+    dir: Vec3::Z,
+    throughput: Rgb::ZERO,
+    length: 0,
+    d_vcm: 0.0,
+    d_vc: 0.0,
+    d_vm: 0.0,
+    merging: MergeWeights::NONE,
+    finite_start: true,
+    roulette_scale: 1.0,
+    weighted: true,
+};
