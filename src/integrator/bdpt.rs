@@ -242,6 +242,7 @@ impl Bidirectional {
                 blocked: walk.throughput * Rgb::ZERO,
                 s: 1,
                 t,
+                recorded: true,
             };
             connect(ray, share, result, sink);
             for v in light_vertices {
@@ -256,11 +257,14 @@ impl Bidirectional {
                     blocked: throughput * Rgb::ZERO,
                     s: v.length + 1,
                     t,
+                    recorded: true,
                 };
                 connect(ray, share, result, sink);
             }
             if let Some(pass) = merges.filter(|_| MERGE) {
-                *result += walk.throughput * pass.merge(&surface, &bsdf, wo, walk, max_depth);
+                // After the connections, whenever the caller adds them.
+                let merged = walk.throughput * pass.merge(&surface, &bsdf, wo, walk, max_depth);
+                connect(None, Share::merges(merged), result, sink);
             }
         }
         if !walk.follow(
@@ -300,9 +304,26 @@ pub(super) struct Share {
     blocked: Rgb,
     s: u32,
     t: u32,
+    /// Whether it is one strategy's, for `--bdpt-strategies`; VCM's merges
+    /// at a vertex, already weighted, are not.
+    recorded: bool,
 }
 
 impl Share {
+    /// VCM's merges at a vertex, weighted and with the throughput: they
+    /// need no shadow ray, but come after the vertex's connections.
+    #[inline(always)]
+    fn merges(value: Rgb) -> Share {
+        Share {
+            value,
+            weight: 1.0,
+            blocked: value,
+            s: 0,
+            t: 0,
+            recorded: false,
+        }
+    }
+
     /// Adds the share to `result` (and records it in `sink`) once its
     /// shadow ray is known to be `free` or not.
     #[inline(always)]
@@ -313,7 +334,9 @@ impl Share {
             (self.blocked, 0.0)
         };
         *result += unweighted * weight;
-        sink.record(self.s, self.t, pixel, unweighted, weight);
+        if self.recorded {
+            sink.record(self.s, self.t, pixel, unweighted, weight);
+        }
     }
 }
 

@@ -16,6 +16,7 @@ use super::bdpt::{camera_splat_weight, start_camera_walk, Bidirectional, CameraV
 use super::connect::sample_lens;
 use super::light_path::{camera_splat_unshadowed, light_vertex, looks_further};
 use super::sink::SampleSink;
+use super::vcm::LightPass;
 use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, MergeWeights, Walk};
 use super::PixelSample;
 use crate::bvh::{for_lanes, Hit, LANES};
@@ -55,12 +56,7 @@ impl Bidirectional {
         let total = pixels.len() * count;
         assert_eq!(out.len(), total, "one slot per sample");
         for first in (0..total).step_by(LANES) {
-            let n = LANES.min(total - first);
-            let samples: [PixelSample; LANES] = std::array::from_fn(|k| {
-                let slot = first + k.min(n - 1);
-                let pixel = pixels[slot / count];
-                pixel.with_index(pixel.index + (slot % count) as u64)
-            });
+            let (n, samples) = lane_samples(pixels, count, first);
             let mut camera_samplers = samples.map(|s| s.camera_sampler());
             // Drawn first, as `Bidirectional::sample` does.
             let jitters: [(f32, f32); LANES] =
@@ -72,13 +68,54 @@ impl Bidirectional {
                     sink.emit(pixel, value);
                 }
             }
-            let estimates = self.camera_walks(
+            let vertices = &state.vertices;
+            let estimates = self.camera_walks::<false>(
                 scene,
                 camera,
                 &samples[..n],
                 &mut camera_samplers,
                 jitters,
-                state,
+                None,
+                |k| &vertices[k],
+                &mut state.connections,
+            );
+            out[first..first + n].copy_from_slice(&estimates[..n]);
+        }
+    }
+
+    /// VCM's camera paths in lanes: samples `pixels[p].index .. + count`
+    /// of each pixel `pixels[p]` in the iteration whose light pass is
+    /// `pass`, `out[p * count + i]` getting what `VertexMerging::sample`
+    /// returns for sample `pixels[p].index + i`. Strategies are not
+    /// recorded.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn sample_pixels_merging(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        pixels: &[PixelSample],
+        count: u32,
+        out: &mut [Rgb],
+        pass: &LightPass,
+        state: &mut LaneState,
+    ) {
+        let count = count as usize;
+        let total = pixels.len() * count;
+        assert_eq!(out.len(), total, "one slot per sample");
+        for first in (0..total).step_by(LANES) {
+            let (n, samples) = lane_samples(pixels, count, first);
+            let mut camera_samplers = samples.map(|s| s.camera_sampler());
+            let jitters: [(f32, f32); LANES] =
+                std::array::from_fn(|k| camera_samplers[k].next_2d());
+            let estimates = self.camera_walks::<true>(
+                scene,
+                camera,
+                &samples[..n],
+                &mut camera_samplers,
+                jitters,
+                Some(pass),
+                |k| pass.path_of(samples[k].x, samples[k].y),
+                &mut state.connections,
             );
             out[first..first + n].copy_from_slice(&estimates[..n]);
         }
@@ -160,29 +197,29 @@ impl Bidirectional {
     }
 
     /// The camera walks of `samples`, one per lane, each connecting to its
-    /// lane's light vertices (see `Bidirectional::trace_camera_path`, which
-    /// this takes in lanes); returns each lane's estimate.
-    fn camera_walks(
+    /// lane's light vertices (`vertices(k)` for lane k) and, for VCM
+    /// (`MERGE`), merging with `merges` (see `Bidirectional::
+    /// trace_camera_path`, which this takes in lanes); returns each lane's
+    /// estimate.
+    #[allow(clippy::too_many_arguments)]
+    fn camera_walks<'a, const MERGE: bool>(
         &self,
         scene: &Scene,
         camera: &Camera,
         samples: &[PixelSample],
         samplers: &mut [Sampler; LANES],
         jitters: [(f32, f32); LANES],
-        state: &mut LaneState,
+        merges: Option<&LightPass>,
+        vertices: impl Fn(usize) -> &'a [LightVertex],
+        connections: &mut Vec<(usize, Option<Ray>, Share)>,
     ) -> [Rgb; LANES] {
+        let merging = merges.map_or(MergeWeights::NONE, |pass| pass.merging);
         let mut results = [Rgb::ZERO; LANES];
         let mut walks = [IDLE; LANES];
         let mut pixels = [0u32; LANES];
         let mut active = 0u32;
         for (k, &sample) in samples.iter().enumerate() {
-            let start = start_camera_walk(
-                camera,
-                &mut samplers[k],
-                sample,
-                jitters[k],
-                MergeWeights::NONE,
-            );
+            let start = start_camera_walk(camera, &mut samplers[k], sample, jitters[k], merging);
             if let Some((walk, pixel)) = start {
                 (walks[k], pixels[k]) = (walk, pixel);
                 active |= 1 << k;
@@ -193,7 +230,6 @@ impl Bidirectional {
         let unused = Ray::new(Vec3::ZERO, Vec3::Z);
         let mut rays = [unused; LANES];
         let mut hits: [Option<Hit>; LANES] = [None; LANES];
-        let connections = &mut state.connections;
         while active != 0 {
             for_lanes(active, |k| {
                 rays[k] = Ray::new(walks[k].origin, walks[k].dir)
@@ -204,14 +240,14 @@ impl Bidirectional {
             for_lanes(active, |k| {
                 let at = CameraVertex {
                     scene,
-                    light_vertices: &state.vertices[k],
-                    merges: None,
+                    light_vertices: vertices(k),
+                    merges,
                     pixel: pixels[k],
                 };
                 let mut wait = |ray: Option<Ray>, share: Share, _: &mut Rgb, _: &mut SampleSink| {
                     connections.push((k, ray, share))
                 };
-                if self.camera_vertex::<false>(
+                if self.camera_vertex::<MERGE>(
                     at,
                     &mut walks[k],
                     &mut samplers[k],
@@ -231,6 +267,22 @@ impl Bidirectional {
         }
         results
     }
+}
+
+/// The `LANES` samples from slot `first` on of `pixels`' `count` samples
+/// each, and how many of them there are (the last, if fewer, repeated).
+fn lane_samples(
+    pixels: &[PixelSample],
+    count: usize,
+    first: usize,
+) -> (usize, [PixelSample; LANES]) {
+    let n = LANES.min(pixels.len() * count - first);
+    let samples = std::array::from_fn(|k| {
+        let slot = first + k.min(n - 1);
+        let pixel = pixels[slot / count];
+        pixel.with_index(pixel.index + (slot % count) as u64)
+    });
+    (n, samples)
 }
 
 /// A lane's walk before it has one; never traced.

@@ -200,9 +200,10 @@ impl Integrator {
 
     /// Whether the estimator takes a tile's samples many paths at a time,
     /// through [`Integrator::sample_pixels`], rather than one by one
-    /// through [`Integrator::sample`]: the path tracer and BDPT.
+    /// through [`Integrator::sample`]: all but the light tracer, whose
+    /// paths measured no faster in lanes.
     pub fn samples_in_lanes(&self) -> bool {
-        matches!(self, Integrator::Pt(_) | Integrator::Bdpt(_))
+        !matches!(self, Integrator::Lt(_))
     }
 
     /// For an estimator that [`samples_in_lanes`](Integrator::samples_in_lanes):
@@ -210,7 +211,8 @@ impl Integrator {
     /// estimate of sample `pixels[p].index + i` in `out[p * count + i]`
     /// and its splats in `sinks[(pixels[p].index + i) % 2]`, the same
     /// numbers, in the same order, as [`Integrator::sample`] gives one by
-    /// one. Strategies are not recorded.
+    /// one. Strategies are not recorded. `light_pass` is as for
+    /// [`Integrator::sample`].
     #[allow(clippy::too_many_arguments)]
     pub fn sample_pixels(
         &self,
@@ -221,6 +223,7 @@ impl Integrator {
         out: &mut [Rgb],
         sinks: &mut [SampleSink; 2],
         state: &mut ThreadState,
+        light_pass: Option<&LightPass>,
     ) {
         match self {
             Integrator::Pt(pt) => pt.sample_pixels(scene, camera, pixels, count, out),
@@ -228,7 +231,14 @@ impl Integrator {
                 let lanes = &mut state.lanes;
                 bdpt.sample_pixels(scene, camera, pixels, count, out, sinks, lanes)
             }
-            _ => unreachable!("only the path tracer and BDPT sample in lanes"),
+            Integrator::Vcm(vcm) => match light_pass {
+                Some(pass) => {
+                    let lanes = &mut state.lanes;
+                    vcm.sample_pixels(scene, camera, pixels, count, out, pass, lanes)
+                }
+                None => out.fill(Rgb::ZERO),
+            },
+            Integrator::Lt(_) => unreachable!("the light tracer takes its samples one by one"),
         }
     }
 

@@ -155,7 +155,7 @@ impl Pass<'_> {
         // The lanes record no strategies: a pass that keeps them takes its
         // samples one by one, the same samples.
         if self.integrator.samples_in_lanes() && !self.keep_strategies {
-            self.tile_in_lanes(tile, &mut sinks, &mut state);
+            self.tile_in_lanes(tile, &mut sinks, &mut state, light);
         } else {
             for y in tile.y0..tile.y1 {
                 for x in tile.x0..tile.x1 {
@@ -197,7 +197,13 @@ impl Pass<'_> {
     /// the shape it had before the lanes (see docs/benchmarks.md, "Paths
     /// in lanes").
     #[inline(never)]
-    fn tile_in_lanes(&self, tile: &mut Tile, sinks: &mut [SampleSink; 2], state: &mut ThreadState) {
+    fn tile_in_lanes(
+        &self,
+        tile: &mut Tile,
+        sinks: &mut [SampleSink; 2],
+        state: &mut ThreadState,
+        light: Option<&LightPass>,
+    ) {
         let (first, count) = (self.first, self.count);
         if count == 0 {
             return;
@@ -225,6 +231,7 @@ impl Pass<'_> {
                 &mut estimates,
                 sinks,
                 state,
+                light,
             );
             for (&(x, y), pixel) in chunk.iter().zip(estimates.chunks(count as usize)) {
                 // As the one-by-one loop in `tile` adds them: the same sums.

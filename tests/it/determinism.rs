@@ -182,6 +182,7 @@ fn paths_in_lanes_are_the_paths_one_by_one() {
             &mut in_lanes,
             &mut sinks,
             &mut state,
+            None,
         );
         let mut sink = SampleSink::default();
         let alone: Vec<Rgb> = pixels
@@ -242,6 +243,7 @@ fn bdpt_samples_in_lanes_are_the_samples_one_by_one() {
             &mut in_lanes,
             &mut lane_sinks,
             &mut state,
+            None,
         );
         let mut sinks = [SampleSink::default(), SampleSink::default()];
         let mut alone = Vec::new();
@@ -279,5 +281,62 @@ fn bdpt_samples_in_lanes_are_the_samples_one_by_one() {
         let splatted = sinks[0].splats.len() + sinks[1].splats.len();
         // Open scenes lose most light paths to the sky: a few splats there.
         assert!(splatted >= 20, "{path}: only {splatted} splats");
+    }
+}
+
+/// VCM's camera paths too go sixteen at a time, after each iteration's
+/// light pass: every sample must be the one it gives alone, bit for bit.
+#[test]
+fn vcm_samples_in_lanes_are_the_samples_one_by_one() {
+    use tracer::color::Rgb;
+    use tracer::integrator::{Integrator, PixelSample, SampleSink, ThreadState};
+    use tracer::settings::IntegratorKind;
+    for path in [
+        "scenes/cornell-box.json",
+        "scenes/cornell-caustics.json",
+        "scenes/lights.json",
+        "scenes/sky-materials.json",
+    ] {
+        let (scene, mut settings) = common::load_scene(path);
+        settings.integrator = IntegratorKind::Vcm;
+        let integrator = Integrator::new(&settings);
+        assert!(integrator.samples_in_lanes());
+        let camera = settings.camera().unwrap();
+        let (w, h) = (settings.film.width, settings.film.height);
+        // One sample per pixel and iteration; 301 pixels, not a multiple of the lanes.
+        let index = 3;
+        let pass = integrator
+            .light_pass(&scene, &camera, 17, index, None)
+            .expect("VCM has a light pass");
+        let pixels: Vec<PixelSample> = (0..301u32)
+            .map(|k| PixelSample::new(k * 97 % w, k * 61 % h, index, 17))
+            .collect();
+        let mut in_lanes = vec![Rgb::ZERO; pixels.len()];
+        let mut sinks = [SampleSink::default(), SampleSink::default()];
+        let mut state = ThreadState::default();
+        integrator.sample_pixels(
+            &scene,
+            &camera,
+            &pixels,
+            1,
+            &mut in_lanes,
+            &mut sinks,
+            &mut state,
+            Some(&pass),
+        );
+        let mut sink = SampleSink::default();
+        let alone: Vec<Rgb> = pixels
+            .iter()
+            .map(|&p| integrator.sample(&scene, &camera, p, &mut state, &mut sink, Some(&pass)))
+            .collect();
+        let bits = |c: &Rgb| c.to_array().map(f32::to_bits);
+        if let Some(k) = (0..alone.len()).find(|&k| bits(&in_lanes[k]) != bits(&alone[k])) {
+            panic!(
+                "{path}: sample {k} is {} in lanes, {} alone",
+                in_lanes[k], alone[k]
+            );
+        }
+        let lit = alone.iter().filter(|c| c.max_element() > 0.0).count();
+        assert!(lit > alone.len() / 4, "{path}: only {lit} lit samples");
     }
 }

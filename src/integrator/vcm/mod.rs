@@ -21,6 +21,7 @@
 mod grid;
 
 use super::bdpt::{start_camera_walk, Bidirectional};
+use super::bdpt_lanes::LaneState;
 use super::mis::mis;
 use super::sink::SampleSink;
 use super::walk::{light_paths_per_pass, LightVertex, MergeWeights, Walk};
@@ -147,6 +148,29 @@ impl VertexMerging {
     }
 }
 
+impl VertexMerging {
+    /// The camera paths of `pixels[p]`'s samples `index .. + count` in the
+    /// iteration whose light pass is `pass`, sixteen at a time (see
+    /// `bdpt_lanes.rs`): `out[p * count + i]` gets what
+    /// [`VertexMerging::sample`] returns for sample `index + i`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample_pixels(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        pixels: &[PixelSample],
+        count: u32,
+        out: &mut [Rgb],
+        pass: &LightPass,
+        lanes: &mut LaneState,
+    ) {
+        let bdpt = Bidirectional {
+            max_depth: self.max_depth,
+        };
+        bdpt.sample_pixels_merging(scene, camera, pixels, count, out, pass, lanes);
+    }
+}
+
 /// The merging radii whose kernel area π r² N, over `light_paths` paths,
 /// lies within 1e±30: below, the density estimate's normalisation would
 /// overflow; above, the kernel would.
@@ -164,7 +188,7 @@ pub struct LightPass {
     /// What merging needs of every light vertex, in row order.
     points: Vec<MergePoint>,
     grid: HashGrid<MergePoint>,
-    merging: MergeWeights,
+    pub(in crate::integrator) merging: MergeWeights,
     /// 1 / (π r² N): the density estimate's kernel over the path count.
     normalization: f32,
 }
@@ -227,7 +251,7 @@ impl Located for MergePoint {
 
 impl LightPass {
     /// The light vertices traced for pixel (`x`, `y`).
-    fn path_of(&self, x: u32, y: u32) -> &[LightVertex] {
+    pub(in crate::integrator) fn path_of(&self, x: u32, y: u32) -> &[LightVertex] {
         let Some(row) = self.rows.get(y as usize) else {
             return &[];
         };
