@@ -165,11 +165,13 @@ impl Bidirectional {
     }
 
     /// The vertex of the camera subpath `walk` where its ray found `hit`
-    /// (`None`: it left the scene). The strategies that need no shadow ray
-    /// (s = 0, merges) go into `result` at once; those that do (s = 1, and
-    /// a connection to each stored light vertex) go to `connect` with
-    /// their ray, in order, for the caller to trace (see [`Share`]).
-    /// Returns whether the walk goes on, along its next ray.
+    /// (`None`: it left the scene). s = 0 goes into `result` at once; the
+    /// strategies that need a shadow ray (s = 1, and a connection to each
+    /// stored light vertex) go to `connect` with their ray, in order, for
+    /// the caller to trace and add (see [`Share`]), and so do VCM's merges,
+    /// without a ray, so that they are added after the connections whenever
+    /// the caller adds those. Returns whether the walk goes on, along its
+    /// next ray.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     pub(super) fn camera_vertex<const MERGE: bool>(
@@ -296,7 +298,8 @@ pub(super) struct CameraVertex<'a> {
 /// A strategy at a camera vertex that waits on its shadow ray: what it
 /// adds if the ray is free (`value` times `weight`), and if it is blocked
 /// (`blocked`, the throughputs times zero, with weight zero), as a strategy
-/// of `s` light and `t` camera vertices.
+/// of `s` light and `t` camera vertices. VCM's merges at the vertex travel
+/// as a share too (see [`Share::merges`]).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Share {
     value: Rgb,
