@@ -57,10 +57,6 @@ impl Bidirectional {
         assert_eq!(out.len(), total, "one slot per sample");
         for first in (0..total).step_by(LANES) {
             let (n, samples) = lane_samples(pixels, count, first);
-            let mut camera_samplers = samples.map(|s| s.camera_sampler());
-            // Drawn first, as `Bidirectional::sample` does.
-            let jitters: [(f32, f32); LANES] =
-                std::array::from_fn(|k| camera_samplers[k].next_2d());
             self.light_walks(scene, camera, &samples[..n], state);
             for (k, sample) in samples[..n].iter().enumerate() {
                 let sink = &mut sinks[(sample.index % 2) as usize];
@@ -73,8 +69,6 @@ impl Bidirectional {
                 scene,
                 camera,
                 &samples[..n],
-                &mut camera_samplers,
-                jitters,
                 None,
                 |k| &vertices[k],
                 &mut state.connections,
@@ -104,15 +98,10 @@ impl Bidirectional {
         assert_eq!(out.len(), total, "one slot per sample");
         for first in (0..total).step_by(LANES) {
             let (n, samples) = lane_samples(pixels, count, first);
-            let mut camera_samplers = samples.map(|s| s.camera_sampler());
-            let jitters: [(f32, f32); LANES] =
-                std::array::from_fn(|k| camera_samplers[k].next_2d());
             let estimates = self.camera_walks::<true>(
                 scene,
                 camera,
                 &samples[..n],
-                &mut camera_samplers,
-                jitters,
                 Some(pass),
                 |k| pass.path_of(samples[k].x, samples[k].y),
                 &mut state.connections,
@@ -207,8 +196,6 @@ impl Bidirectional {
         scene: &Scene,
         camera: &Camera,
         samples: &[PixelSample],
-        samplers: &mut [Sampler; LANES],
-        jitters: [(f32, f32); LANES],
         merges: Option<&LightPass>,
         vertices: impl Fn(usize) -> &'a [LightVertex],
         connections: &mut Vec<(usize, Option<Ray>, Share)>,
@@ -218,8 +205,13 @@ impl Bidirectional {
         let mut walks = [IDLE; LANES];
         let mut pixels = [0u32; LANES];
         let mut active = 0u32;
+        let mut samplers: [Sampler; LANES] =
+            std::array::from_fn(|k| samples[k.min(samples.len() - 1)].camera_sampler());
         for (k, &sample) in samples.iter().enumerate() {
-            let start = start_camera_walk(camera, &mut samplers[k], sample, jitters[k], merging);
+            // The pixel jitter comes first, as in `Bidirectional::sample`;
+            // the light walk, already traced, drew from a sampler of its own.
+            let jitter = samplers[k].next_2d();
+            let start = start_camera_walk(camera, &mut samplers[k], sample, jitter, merging);
             if let Some((walk, pixel)) = start {
                 (walks[k], pixels[k]) = (walk, pixel);
                 active |= 1 << k;

@@ -141,35 +141,70 @@ fn splats_of_many_batches_add_up_alike_for_any_thread_count() {
     }
 }
 
+/// The bundled scenes the lanes are checked on: between them flat and
+/// tree traversal, every material, every kind of light, the environment
+/// and a thin lens.
+const LANE_SCENES: [&str; 7] = [
+    "scenes/cornell-box.json",
+    "scenes/cornell-caustics.json",
+    "scenes/mirror-caustic.json",
+    "scenes/lights.json",
+    "scenes/textured.json",
+    "scenes/rough-materials.json",
+    "scenes/sky-materials.json",
+];
+
+/// `path` loaded for `kind`, its estimator and camera, and `n` pixels
+/// spread over the image, each from sample `index` of seed 17.
+fn lanes_setup(
+    path: &str,
+    kind: tracer::settings::IntegratorKind,
+    n: u32,
+    index: u64,
+) -> (
+    Scene,
+    tracer::integrator::Integrator,
+    tracer::camera::Camera,
+    Vec<tracer::integrator::PixelSample>,
+) {
+    let (scene, mut settings) = common::load_scene(path);
+    settings.integrator = kind;
+    let integrator = tracer::integrator::Integrator::new(&settings);
+    assert!(integrator.samples_in_lanes());
+    let camera = settings.camera().unwrap();
+    let (w, h) = (settings.film.width, settings.film.height);
+    let pixels = (0..n)
+        .map(|k| tracer::integrator::PixelSample::new(k * 97 % w, k * 61 % h, index, 17))
+        .collect();
+    (scene, integrator, camera, pixels)
+}
+
+/// Panics unless the samples taken in lanes are those taken alone, bit for
+/// bit, and a quarter of them at least carry light.
+fn assert_same_samples(path: &str, in_lanes: &[tracer::color::Rgb], alone: &[tracer::color::Rgb]) {
+    let bits = |c: &tracer::color::Rgb| c.to_array().map(f32::to_bits);
+    if let Some(k) = (0..alone.len()).find(|&k| bits(&in_lanes[k]) != bits(&alone[k])) {
+        panic!(
+            "{path}: sample {k} is {} in lanes, {} alone",
+            in_lanes[k], alone[k]
+        );
+    }
+    let lit = alone.iter().filter(|c| c.max_element() > 0.0).count();
+    assert!(lit > alone.len() / 4, "{path}: only {lit} lit samples");
+}
+
 /// The path tracer takes a tile's samples sixteen paths at a time, their
 /// rays traced together; every sample must be the one it takes alone, bit
-/// for bit. The scenes have between them flat and tree traversal, every
-/// material, every kind of light, the environment and a thin lens.
+/// for bit.
 #[test]
 fn paths_in_lanes_are_the_paths_one_by_one() {
     use tracer::color::Rgb;
-    use tracer::integrator::{Integrator, PixelSample, SampleSink, ThreadState};
+    use tracer::integrator::{SampleSink, ThreadState};
     use tracer::settings::IntegratorKind;
-    for path in [
-        "scenes/cornell-box.json",
-        "scenes/cornell-caustics.json",
-        "scenes/mirror-caustic.json",
-        "scenes/lights.json",
-        "scenes/textured.json",
-        "scenes/rough-materials.json",
-        "scenes/sky-materials.json",
-    ] {
-        let (scene, mut settings) = common::load_scene(path);
-        settings.integrator = IntegratorKind::Pt;
-        let integrator = Integrator::new(&settings);
-        assert!(integrator.samples_in_lanes());
-        let camera = settings.camera().unwrap();
-        let (w, h) = (settings.film.width, settings.film.height);
-        // Pixels spread over the image; 37 paths each, not a multiple of
-        // the lanes, from a first index past zero.
-        let pixels: Vec<PixelSample> = (0..23u32)
-            .map(|k| PixelSample::new(k * 97 % w, k * 61 % h, 5, 17))
-            .collect();
+    for path in LANE_SCENES {
+        // 37 paths per pixel, not a multiple of the lanes, from a first
+        // index past zero.
+        let (scene, integrator, camera, pixels) = lanes_setup(path, IntegratorKind::Pt, 23, 5);
         let count = 37;
         let mut in_lanes = vec![Rgb::ZERO; pixels.len() * count as usize];
         let mut sinks = [SampleSink::default(), SampleSink::default()];
@@ -190,15 +225,7 @@ fn paths_in_lanes_are_the_paths_one_by_one() {
             .flat_map(|p| (0..count as u64).map(move |i| p.with_index(p.index + i)))
             .map(|sample| integrator.sample(&scene, &camera, sample, &mut state, &mut sink, None))
             .collect();
-        let bits = |c: &Rgb| c.to_array().map(f32::to_bits);
-        if let Some(k) = (0..alone.len()).find(|&k| bits(&in_lanes[k]) != bits(&alone[k])) {
-            panic!(
-                "{path}: sample {k} is {} in lanes, {} alone",
-                in_lanes[k], alone[k]
-            );
-        }
-        let lit = alone.iter().filter(|c| c.max_element() > 0.0).count();
-        assert!(lit > alone.len() / 4, "{path}: only {lit} lit samples");
+        assert_same_samples(path, &in_lanes, &alone);
     }
 }
 
@@ -209,28 +236,12 @@ fn paths_in_lanes_are_the_paths_one_by_one() {
 #[test]
 fn bdpt_samples_in_lanes_are_the_samples_one_by_one() {
     use tracer::color::Rgb;
-    use tracer::integrator::{Integrator, PixelSample, SampleSink, ThreadState};
+    use tracer::integrator::{SampleSink, ThreadState};
     use tracer::settings::IntegratorKind;
-    for path in [
-        "scenes/cornell-box.json",
-        "scenes/cornell-caustics.json",
-        "scenes/mirror-caustic.json",
-        "scenes/lights.json",
-        "scenes/textured.json",
-        "scenes/rough-materials.json",
-        "scenes/sky-materials.json",
-    ] {
-        let (scene, mut settings) = common::load_scene(path);
-        settings.integrator = IntegratorKind::Bdpt;
-        let integrator = Integrator::new(&settings);
-        assert!(integrator.samples_in_lanes());
-        let camera = settings.camera().unwrap();
-        let (w, h) = (settings.film.width, settings.film.height);
+    for path in LANE_SCENES {
         // 37 samples per pixel: not a multiple of the lanes, and from an
         // odd first index, so both halves get samples from every batch.
-        let pixels: Vec<PixelSample> = (0..23u32)
-            .map(|k| PixelSample::new(k * 97 % w, k * 61 % h, 5, 17))
-            .collect();
+        let (scene, integrator, camera, pixels) = lanes_setup(path, IntegratorKind::Bdpt, 23, 5);
         let count = 37;
         let mut in_lanes = vec![Rgb::ZERO; pixels.len() * count as usize];
         let mut lane_sinks = [SampleSink::default(), SampleSink::default()];
@@ -254,13 +265,8 @@ fn bdpt_samples_in_lanes_are_the_samples_one_by_one() {
                 alone.push(integrator.sample(&scene, &camera, sample, &mut state, sink, None));
             }
         }
+        assert_same_samples(path, &in_lanes, &alone);
         let bits = |c: &Rgb| c.to_array().map(f32::to_bits);
-        if let Some(k) = (0..alone.len()).find(|&k| bits(&in_lanes[k]) != bits(&alone[k])) {
-            panic!(
-                "{path}: sample {k} is {} in lanes, {} alone",
-                in_lanes[k], alone[k]
-            );
-        }
         for (half, (lanes, one_by_one)) in lane_sinks.iter().zip(&sinks).enumerate() {
             let splats = |sink: &SampleSink| -> Vec<(u32, [u32; 3])> {
                 sink.splats
@@ -276,8 +282,6 @@ fn bdpt_samples_in_lanes_are_the_samples_one_by_one() {
                 one_by_one.splats.len()
             );
         }
-        let lit = alone.iter().filter(|c| c.max_element() > 0.0).count();
-        assert!(lit > alone.len() / 4, "{path}: only {lit} lit samples");
         let splatted = sinks[0].splats.len() + sinks[1].splats.len();
         // Open scenes lose most light paths to the sky: a few splats there.
         assert!(splatted >= 20, "{path}: only {splatted} splats");
@@ -289,7 +293,7 @@ fn bdpt_samples_in_lanes_are_the_samples_one_by_one() {
 #[test]
 fn vcm_samples_in_lanes_are_the_samples_one_by_one() {
     use tracer::color::Rgb;
-    use tracer::integrator::{Integrator, PixelSample, SampleSink, ThreadState};
+    use tracer::integrator::{SampleSink, ThreadState};
     use tracer::settings::IntegratorKind;
     for path in [
         "scenes/cornell-box.json",
@@ -297,20 +301,14 @@ fn vcm_samples_in_lanes_are_the_samples_one_by_one() {
         "scenes/lights.json",
         "scenes/sky-materials.json",
     ] {
-        let (scene, mut settings) = common::load_scene(path);
-        settings.integrator = IntegratorKind::Vcm;
-        let integrator = Integrator::new(&settings);
-        assert!(integrator.samples_in_lanes());
-        let camera = settings.camera().unwrap();
-        let (w, h) = (settings.film.width, settings.film.height);
-        // One sample per pixel and iteration; 301 pixels, not a multiple of the lanes.
+        // One sample per pixel and iteration; 301 pixels, not a multiple
+        // of the lanes.
         let index = 3;
+        let (scene, integrator, camera, pixels) =
+            lanes_setup(path, IntegratorKind::Vcm, 301, index);
         let pass = integrator
             .light_pass(&scene, &camera, 17, index, None)
             .expect("VCM has a light pass");
-        let pixels: Vec<PixelSample> = (0..301u32)
-            .map(|k| PixelSample::new(k * 97 % w, k * 61 % h, index, 17))
-            .collect();
         let mut in_lanes = vec![Rgb::ZERO; pixels.len()];
         let mut sinks = [SampleSink::default(), SampleSink::default()];
         let mut state = ThreadState::default();
@@ -329,14 +327,6 @@ fn vcm_samples_in_lanes_are_the_samples_one_by_one() {
             .iter()
             .map(|&p| integrator.sample(&scene, &camera, p, &mut state, &mut sink, Some(&pass)))
             .collect();
-        let bits = |c: &Rgb| c.to_array().map(f32::to_bits);
-        if let Some(k) = (0..alone.len()).find(|&k| bits(&in_lanes[k]) != bits(&alone[k])) {
-            panic!(
-                "{path}: sample {k} is {} in lanes, {} alone",
-                in_lanes[k], alone[k]
-            );
-        }
-        let lit = alone.iter().filter(|c| c.max_element() > 0.0).count();
-        assert!(lit > alone.len() / 4, "{path}: only {lit} lit samples");
+        assert_same_samples(path, &in_lanes, &alone);
     }
 }
