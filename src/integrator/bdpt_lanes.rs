@@ -10,7 +10,8 @@
 //! alone ([`Bidirectional::sample`]): its estimate is the same bit for bit,
 //! its strategies add up in the same order, and its splats reach the sinks
 //! in the order one sample after another would emit them (a test checks
-//! all three).
+//! all three). VCM's camera paths take the same camera lanes, after the
+//! iteration's light pass, each connecting to its own pixel's light path.
 
 use super::bdpt::{camera_splat_weight, start_camera_walk, Bidirectional, CameraVertex, Share};
 use super::connect::sample_lens;
