@@ -16,11 +16,11 @@
 //! light point seen directly (s = 1, t = 1) is left to s = 0.
 
 use super::connect::{sample_lens, segment_ray, shadow_ray, CameraConnection, Endpoint};
-use super::light_path::{camera_splat, follow_light_walk};
+use super::light_path::{begin_light_path, camera_splat, follow_light_walk};
 use super::mis::mis;
 use super::sink::SampleSink;
 use super::vcm::LightPass;
-use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, MergeWeights, Walk};
+use super::walk::{light_paths_per_pass, LightVertex, MergeWeights, Walk};
 use super::{PixelSample, ThreadState};
 use crate::bvh::Hit;
 use crate::camera::Camera;
@@ -104,12 +104,10 @@ impl Bidirectional {
         keep: &mut Vec<LightVertex>,
         sink: &mut SampleSink,
     ) {
-        sampler.start_vertex();
-        let Some(start) = start_light_walk(scene, sampler, merging) else {
+        let Some((start, lens)) = begin_light_path(scene, camera, sampler, merging) else {
             return;
         };
         let paths = light_paths_per_pass(camera);
-        let lens = sample_lens(camera, sampler);
         follow_light_walk(scene, sampler, start.walk, self.max_depth, |v| {
             keep.push(*v);
             if let Some((c, value)) = camera_splat(scene, camera, lens, v, paths) {

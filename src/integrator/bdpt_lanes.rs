@@ -14,11 +14,10 @@
 //! iteration's light pass, each connecting to its own pixel's light path.
 
 use super::bdpt::{camera_splat_weight, start_camera_walk, Bidirectional, CameraVertex, Share};
-use super::connect::sample_lens;
-use super::light_path::{camera_splat_unshadowed, light_vertex, looks_further};
+use super::light_path::{begin_light_path, camera_splat_unshadowed, light_vertex, looks_further};
 use super::sink::SampleSink;
 use super::vcm::LightPass;
-use super::walk::{light_paths_per_pass, start_light_walk, LightVertex, MergeWeights, Walk};
+use super::walk::{light_paths_per_pass, LightVertex, MergeWeights, Walk};
 use super::PixelSample;
 use crate::bvh::{for_lanes, Hit, LANES};
 use crate::camera::Camera;
@@ -53,13 +52,9 @@ impl Bidirectional {
         sinks: &mut [SampleSink; 2],
         state: &mut LaneState,
     ) {
-        let count = count as usize;
-        let total = pixels.len() * count;
-        assert_eq!(out.len(), total, "one slot per sample");
-        for first in (0..total).step_by(LANES) {
-            let (n, samples) = lane_samples(pixels, count, first);
-            self.light_walks(scene, camera, &samples[..n], state);
-            for (k, sample) in samples[..n].iter().enumerate() {
+        in_lane_batches(pixels, count, out, |samples, out| {
+            self.light_walks(scene, camera, samples, state);
+            for (k, sample) in samples.iter().enumerate() {
                 let sink = &mut sinks[(sample.index % 2) as usize];
                 for (pixel, value) in state.splats[k].drain(..) {
                     sink.emit(pixel, value);
@@ -69,13 +64,13 @@ impl Bidirectional {
             let estimates = self.camera_walks::<false>(
                 scene,
                 camera,
-                &samples[..n],
+                samples,
                 None,
                 |k| &vertices[k],
                 &mut state.connections,
             );
-            out[first..first + n].copy_from_slice(&estimates[..n]);
-        }
+            out.copy_from_slice(&estimates[..samples.len()]);
+        });
     }
 
     /// VCM's camera paths in lanes: samples `pixels[p].index .. + count`
@@ -94,21 +89,17 @@ impl Bidirectional {
         pass: &LightPass,
         state: &mut LaneState,
     ) {
-        let count = count as usize;
-        let total = pixels.len() * count;
-        assert_eq!(out.len(), total, "one slot per sample");
-        for first in (0..total).step_by(LANES) {
-            let (n, samples) = lane_samples(pixels, count, first);
+        in_lane_batches(pixels, count, out, |samples, out| {
             let estimates = self.camera_walks::<true>(
                 scene,
                 camera,
-                &samples[..n],
+                samples,
                 Some(pass),
                 |k| pass.path_of(samples[k].x, samples[k].y),
                 &mut state.connections,
             );
-            out[first..first + n].copy_from_slice(&estimates[..n]);
-        }
+            out.copy_from_slice(&estimates[..samples.len()]);
+        });
     }
 
     /// The light walks of `samples`, one per lane: each lane's vertices
@@ -130,11 +121,9 @@ impl Bidirectional {
         let mut active = 0u32;
         for k in 0..samples.len() {
             state.vertices[k].clear();
-            let sampler = &mut samplers[k];
-            sampler.start_vertex();
-            if let Some(start) = start_light_walk(scene, sampler, MergeWeights::NONE) {
-                lens[k] = sample_lens(camera, sampler);
-                walks[k] = start.walk;
+            let started = begin_light_path(scene, camera, &mut samplers[k], MergeWeights::NONE);
+            if let Some((start, lens_point)) = started {
+                (walks[k], lens[k]) = (start.walk, lens_point);
                 if looks_further(&walks[k], max_depth) {
                     active |= 1 << k;
                 }
@@ -262,20 +251,27 @@ impl Bidirectional {
     }
 }
 
-/// The `LANES` samples from slot `first` on of `pixels`' `count` samples
-/// each, and how many of them there are (the last, if fewer, repeated).
-fn lane_samples(
+/// Hands `take` each run of up to `LANES` samples of `pixels`' `count`
+/// samples each (samples `index .. + count` of every pixel, pixel by
+/// pixel) with its slots of `out`, one per sample.
+fn in_lane_batches(
     pixels: &[PixelSample],
-    count: usize,
-    first: usize,
-) -> (usize, [PixelSample; LANES]) {
-    let n = LANES.min(pixels.len() * count - first);
-    let samples = std::array::from_fn(|k| {
-        let slot = first + k.min(n - 1);
-        let pixel = pixels[slot / count];
-        pixel.with_index(pixel.index + (slot % count) as u64)
-    });
-    (n, samples)
+    count: u32,
+    out: &mut [Rgb],
+    mut take: impl FnMut(&[PixelSample], &mut [Rgb]),
+) {
+    let count = count as usize;
+    let total = pixels.len() * count;
+    assert_eq!(out.len(), total, "one slot per sample");
+    for (batch, out) in out.chunks_mut(LANES).enumerate() {
+        let first = batch * LANES;
+        let samples: [PixelSample; LANES] = std::array::from_fn(|k| {
+            let slot = first + k.min(out.len() - 1);
+            let pixel = pixels[slot / count];
+            pixel.with_index(pixel.index + (slot % count) as u64)
+        });
+        take(&samples[..out.len()], out);
+    }
 }
 
 /// A lane's walk before it has one; never traced.

@@ -2,8 +2,8 @@
 //! t = 1 strategy). Light tracing and BDPT both walk light paths this way;
 //! they differ only in what they do at each vertex.
 
-use super::connect::{segment_ray, visible, CameraConnection, Endpoint};
-use super::walk::{LightVertex, Walk};
+use super::connect::{sample_lens, segment_ray, visible, CameraConnection, Endpoint};
+use super::walk::{start_light_walk, LightStart, LightVertex, MergeWeights, Walk};
 use crate::bvh::Hit;
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
@@ -12,6 +12,23 @@ use crate::material::Transport;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
+
+/// The start of a light path: its numbers from a fresh group, a light and
+/// the walk's first point and direction on it, then the lens point its
+/// connections to the camera aim at (drawn only by a thin lens). Light
+/// tracing, BDPT and BDPT's lanes all begin here, so their paths draw the
+/// same numbers in the same order. `None` when no light can start one.
+#[inline(always)]
+pub fn begin_light_path(
+    scene: &Scene,
+    camera: &Camera,
+    sampler: &mut Sampler,
+    merging: MergeWeights,
+) -> Option<(LightStart, Vec3)> {
+    sampler.start_vertex();
+    let start = start_light_walk(scene, sampler, merging)?;
+    Some((start, sample_lens(camera, sampler)))
+}
 
 /// Continues `walk` from a light, calling `visit` (which must draw no
 /// numbers from `sampler`) at every vertex that is not a delta (the

@@ -6,11 +6,10 @@
 //! no area and are never seen directly by the pinhole camera, in any
 //! integrator.
 
-use super::connect::sample_lens;
 use super::connect::{visible, CameraConnection, Endpoint};
-use super::light_path::{camera_splat, follow_light_walk};
+use super::light_path::{begin_light_path, camera_splat, follow_light_walk};
 use super::sink::SampleSink;
-use super::walk::{light_paths_per_pass, start_light_walk, LightStart, MergeWeights};
+use super::walk::{light_paths_per_pass, LightStart, MergeWeights};
 use crate::camera::Camera;
 use crate::color::is_black;
 use crate::geometry::Ray;
@@ -35,13 +34,12 @@ impl LightTracer {
         sampler: &mut Sampler,
         sink: &mut SampleSink,
     ) {
-        sampler.start_vertex();
-        let Some(mut start) = start_light_walk(scene, sampler, MergeWeights::NONE) else {
+        let Some((mut start, lens)) = begin_light_path(scene, camera, sampler, MergeWeights::NONE)
+        else {
             return;
         };
         start.walk.weighted = false;
         let paths = light_paths_per_pass(camera);
-        let lens = sample_lens(camera, sampler);
         splat_light_point(scene, camera, lens, &start, paths, sink);
         follow_light_walk(scene, sampler, start.walk, self.max_depth, |v| {
             if let Some((c, value)) = camera_splat(scene, camera, lens, v, paths) {
