@@ -13,7 +13,7 @@
 //! more than the single-ray test, which already fills sixteen lanes with
 //! sixteen triangles.
 
-use super::WideBvh;
+use super::{Traversal, WideBvh};
 use crate::bvh::Hit;
 use crate::geometry::Ray;
 
@@ -30,19 +30,43 @@ impl WideBvh {
         active: u32,
         hits: &mut [Option<Hit>; LANES],
     ) {
-        for_lanes(active, |lane| hits[lane] = self.intersect(&rays[lane]));
+        // The traversal is chosen once for all sixteen rays, and its loop
+        // is inlined here: called per ray, `intersect` spent about 25 of
+        // its 520 instructions on the call and the choice (perf gate's
+        // render-cornell-pt: 3.1% fewer instructions inlined).
+        match self.traversal {
+            Traversal::Tree => for_lanes(active, |lane| {
+                hits[lane] = self.closest_hit::<false>(&rays[lane])
+            }),
+            Traversal::Prefetching => for_lanes(active, |lane| {
+                hits[lane] = self.closest_hit::<true>(&rays[lane])
+            }),
+            Traversal::Flat => for_lanes(active, |lane| {
+                hits[lane] = self.closest_hit_flat(&rays[lane])
+            }),
+        }
     }
 
     /// A bit mask of the rays of `rays` named in `active` that are blocked.
     pub fn occluded_lanes(&self, rays: &[Ray; LANES], active: u32) -> u32 {
-        let mut blocked = 0;
-        for_lanes(active, |lane| {
-            if self.occluded(&rays[lane]) {
-                blocked |= 1 << lane;
-            }
-        });
-        blocked
+        match self.traversal {
+            Traversal::Tree => blocked_lanes(rays, active, |ray| self.any_hit::<false>(ray)),
+            Traversal::Prefetching => blocked_lanes(rays, active, |ray| self.any_hit::<true>(ray)),
+            Traversal::Flat => blocked_lanes(rays, active, |ray| self.any_hit_flat(ray)),
+        }
     }
+}
+
+/// The bits of the lanes of `active` whose rays `occluded` finds blocked.
+#[inline(always)]
+fn blocked_lanes(rays: &[Ray; LANES], active: u32, occluded: impl Fn(&Ray) -> bool) -> u32 {
+    let mut blocked = 0;
+    for_lanes(active, |lane| {
+        if occluded(&rays[lane]) {
+            blocked |= 1 << lane;
+        }
+    });
+    blocked
 }
 
 /// Calls `f` with each lane whose bit is set in `mask`, lowest first.

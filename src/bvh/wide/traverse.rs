@@ -419,7 +419,7 @@ impl WideBvh {
     /// `intersect`, prefetching the children it puts on the stack when
     /// `PREFETCH` is set.
     #[inline(always)]
-    fn closest_hit<const PREFETCH: bool>(&self, ray: &Ray) -> Option<Hit> {
+    pub(super) fn closest_hit<const PREFETCH: bool>(&self, ray: &Ray) -> Option<Hit> {
         if self.root == EMPTY_CHILD {
             return None;
         }
@@ -526,7 +526,7 @@ impl WideBvh {
 
     /// `occluded`, prefetching as `closest_hit` does.
     #[inline(always)]
-    fn any_hit<const PREFETCH: bool>(&self, ray: &Ray) -> bool {
+    pub(super) fn any_hit<const PREFETCH: bool>(&self, ray: &Ray) -> bool {
         if self.root == EMPTY_CHILD {
             return false;
         }
