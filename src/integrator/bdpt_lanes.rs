@@ -42,6 +42,7 @@ impl Bidirectional {
     /// sample `pixels[p].index + i`, and `sinks[index % 2]` the splats it
     /// pushes, in the same order. Strategies are not recorded.
     #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
     pub fn sample_pixels(
         &self,
         scene: &Scene,
@@ -79,6 +80,7 @@ impl Bidirectional {
     /// returns for sample `pixels[p].index + i`. Strategies are not
     /// recorded.
     #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
     pub(super) fn sample_pixels_merging(
         &self,
         scene: &Scene,
@@ -241,10 +243,11 @@ impl Bidirectional {
                     going_on |= 1 << k;
                 }
             });
-            for &(k, ray, share) in connections.iter() {
-                let free = ray.is_none_or(|ray| !scene.occluded(&ray));
-                share.add(free, &mut results[k], pixels[k], &mut no_records);
-            }
+            scene.shadow_run(
+                connections,
+                |&(_, ray, _)| ray,
+                |&(k, _, share), free| share.add(free, &mut results[k], pixels[k], &mut no_records),
+            );
             active = going_on;
         }
         results

@@ -74,6 +74,7 @@ pub fn segment_ray(from: Endpoint, to: Endpoint) -> Option<Ray> {
 
 /// The shadow ray from `surface` to the light sample, each end moved off
 /// its surface; `None` where the two ends meet, which nothing can block.
+#[inline(always)]
 pub fn shadow_ray(surface: &SurfacePoint, sample: &IncidentSample) -> Option<Ray> {
     let origin = offset_origin(
         surface.position,

@@ -26,7 +26,10 @@ const ALL_LANES: u32 = u32::MAX >> (32 - LANES);
 impl PathTracer {
     /// Samples `pixels[p].index .. + count` of each pixel `pixels[p]`:
     /// `out[p * count + i]` gets what [`PathTracer::sample`] returns for
-    /// sample `pixels[p].index + i`.
+    /// sample `pixels[p].index + i`. Out of line, so that what the
+    /// compiler inlines into it does not depend on the other integrators'
+    /// code beside it in the dispatch.
+    #[inline(never)]
     pub fn sample_pixels(
         &self,
         scene: &Scene,

@@ -74,6 +74,8 @@ impl AreaLight {
     }
 
     /// A point chosen uniformly by area.
+    // Inlined: see `Light::sample_incident`.
+    #[inline(always)]
     pub fn sample_incident(&self, receiver: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
         let (b1, b2) = uniform_triangle(u.0, u.1);
         let point = self.triangle.point(b1, b2);

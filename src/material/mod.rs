@@ -301,6 +301,7 @@ impl Bsdf {
     /// `f(wo, wi) · |cos θi|` for radiance, with θi measured from the
     /// shading normal; zero for delta lobes, and where the shading and
     /// geometric normals disagree on which side `wi` is.
+    #[inline(always)]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
         self.eval_local(wo, wi, Transport::Radiance)
     }
@@ -313,6 +314,7 @@ impl Bsdf {
         ((wi.dot(self.frame.n) > 0.0) == reflected).then_some(reflected)
     }
 
+    #[inline(always)]
     fn eval_local(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
         let Some(reflected) = self.side(wi) else {
             return Rgb::ZERO;

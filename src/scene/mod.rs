@@ -134,6 +134,18 @@ impl Scene {
         self.bvh.intersect_lanes(rays, active, hits);
     }
 
+    /// For each of `items` in turn, `done(item, free)`, where `free` is
+    /// whether nothing blocks the shadow ray `ray(item)` (`None`: nothing
+    /// can); see `WideBvh::shadow_run`.
+    pub fn shadow_run<T>(
+        &self,
+        items: &[T],
+        ray: impl Fn(&T) -> Option<Ray>,
+        done: impl FnMut(&T, bool),
+    ) {
+        self.bvh.shadow_run(items, ray, done);
+    }
+
     /// Which of the rays named in `active` are blocked, as a bit mask.
     pub fn occluded_lanes(&self, rays: &[Ray; LANES], active: u32) -> u32 {
         self.bvh.occluded_lanes(rays, active)

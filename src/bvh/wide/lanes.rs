@@ -57,6 +57,39 @@ impl WideBvh {
     }
 }
 
+impl WideBvh {
+    /// For each of `items` in turn, `done(item, free)`: `free` is whether
+    /// nothing blocks the shadow ray `ray(item)` (`None`: nothing can
+    /// block it). The traversal is chosen once for the run and its loop
+    /// inlined, as in `intersect_lanes`.
+    pub fn shadow_run<T>(
+        &self,
+        items: &[T],
+        ray: impl Fn(&T) -> Option<Ray>,
+        done: impl FnMut(&T, bool),
+    ) {
+        match self.traversal {
+            Traversal::Tree => free_each(items, ray, done, |ray| self.any_hit::<false>(ray)),
+            Traversal::Prefetching => free_each(items, ray, done, |ray| self.any_hit::<true>(ray)),
+            Traversal::Flat => free_each(items, ray, done, |ray| self.any_hit_flat(ray)),
+        }
+    }
+}
+
+/// `WideBvh::shadow_run` with the traversal `occluded`.
+#[inline(always)]
+fn free_each<T>(
+    items: &[T],
+    ray: impl Fn(&T) -> Option<Ray>,
+    mut done: impl FnMut(&T, bool),
+    occluded: impl Fn(&Ray) -> bool,
+) {
+    for item in items {
+        let free = ray(item).is_none_or(|ray| !occluded(&ray));
+        done(item, free);
+    }
+}
+
 /// The bits of the lanes of `active` whose rays `occluded` finds blocked.
 #[inline(always)]
 fn blocked_lanes(rays: &[Ray; LANES], active: u32, occluded: impl Fn(&Ray) -> bool) -> u32 {

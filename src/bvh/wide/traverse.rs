@@ -212,13 +212,14 @@ impl RayLanes {
         let o = ray.origin.to_array();
         let inv = safe_inverses(d);
         let (k, s) = RayShear::new(ray.origin, ray.dir).parts();
-        let near_row = [0, 1, 2].map(|a| if inv[a] >= 0.0 { a } else { a + 3 });
+        let negative = inv.map(|i| usize::from(i < 0.0));
+        let near_row = [0, 1, 2].map(|a| a + 3 * negative[a]);
         RayLanes {
             origin: o.map(f32x8::splat),
             neg_inv_dir: inv.map(|i| f32x8::splat(-i)),
             neg_inv_dir_exit: inv.map(|i| f32x8::splat(-(i * EXIT_STRETCH))),
             near_row,
-            far_row: near_row.map(|row| (row + 3) % 6),
+            far_row: [0, 1, 2].map(|a| a + 3 - 3 * negative[a]),
             tmin: ray.tmin,
             k,
             origin_k: k.map(|axis| f32x8::splat(o[axis])),
