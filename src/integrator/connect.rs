@@ -74,6 +74,10 @@ pub fn segment_ray(from: Endpoint, to: Endpoint) -> Option<Ray> {
 
 /// The shadow ray from `surface` to the light sample, each end moved off
 /// its surface; `None` where the two ends meet, which nothing can block.
+/// Always inlined, as `visible`: the compiler stopped inlining it into
+/// the path tracer's lanes when BDPT's lanes grew (perf gate's
+/// render-cornell-pt +3.5% instructions with this and three more calls
+/// left out of line; docs/benchmarks.md).
 #[inline(always)]
 pub fn shadow_ray(surface: &SurfacePoint, sample: &IncidentSample) -> Option<Ray> {
     let origin = offset_origin(

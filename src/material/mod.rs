@@ -301,6 +301,8 @@ impl Bsdf {
     /// `f(wo, wi) · |cos θi|` for radiance, with θi measured from the
     /// shading normal; zero for delta lobes, and where the shading and
     /// geometric normals disagree on which side `wi` is.
+    // Inlined, with `eval_local`: left out of line, the path tracer's light
+    // sample paid two calls per vertex (see `integrator::connect::shadow_ray`).
     #[inline(always)]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
         self.eval_local(wo, wi, Transport::Radiance)
