@@ -16,7 +16,7 @@
 use super::bdpt::{camera_splat_weight, start_camera_walk, Bidirectional, CameraVertex, Share};
 use super::light_path::{begin_light_path, camera_splat_unshadowed, light_vertex, looks_further};
 use super::sink::SampleSink;
-use super::vcm::LightPass;
+use super::vcm::{LightPass, VertexMerging};
 use super::walk::{light_paths_per_pass, LightVertex, MergeWeights, Walk};
 use super::PixelSample;
 use crate::bvh::{for_lanes, Hit, LANES};
@@ -68,36 +68,6 @@ impl Bidirectional {
                 samples,
                 None,
                 |k| &vertices[k],
-                &mut state.connections,
-            );
-            out.copy_from_slice(&estimates[..samples.len()]);
-        });
-    }
-
-    /// VCM's camera paths in lanes: samples `pixels[p].index .. + count`
-    /// of each pixel `pixels[p]` in the iteration whose light pass is
-    /// `pass`, `out[p * count + i]` getting what `VertexMerging::sample`
-    /// returns for sample `pixels[p].index + i`. Strategies are not
-    /// recorded.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(never)]
-    pub(super) fn sample_pixels_merging(
-        &self,
-        scene: &Scene,
-        camera: &Camera,
-        pixels: &[PixelSample],
-        count: u32,
-        out: &mut [Rgb],
-        pass: &LightPass,
-        state: &mut LaneState,
-    ) {
-        in_lane_batches(pixels, count, out, |samples, out| {
-            let estimates = self.camera_walks::<true>(
-                scene,
-                camera,
-                samples,
-                Some(pass),
-                |k| pass.path_of(samples[k].x, samples[k].y),
                 &mut state.connections,
             );
             out.copy_from_slice(&estimates[..samples.len()]);
@@ -251,6 +221,39 @@ impl Bidirectional {
             active = going_on;
         }
         results
+    }
+}
+
+impl VertexMerging {
+    /// VCM's camera paths in lanes: samples `pixels[p].index .. + count`
+    /// of each pixel `pixels[p]` in the iteration whose light pass is
+    /// `pass`, `out[p * count + i]` getting what `VertexMerging::sample`
+    /// returns for sample `pixels[p].index + i`. Strategies are not
+    /// recorded.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    pub fn sample_pixels(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        pixels: &[PixelSample],
+        count: u32,
+        out: &mut [Rgb],
+        pass: &LightPass,
+        state: &mut LaneState,
+    ) {
+        let bdpt = self.bdpt();
+        in_lane_batches(pixels, count, out, |samples, out| {
+            let estimates = bdpt.camera_walks::<true>(
+                scene,
+                camera,
+                samples,
+                Some(pass),
+                |k| pass.path_of(samples[k].x, samples[k].y),
+                &mut state.connections,
+            );
+            out.copy_from_slice(&estimates[..samples.len()]);
+        });
     }
 }
 

@@ -179,6 +179,33 @@ fn lanes_setup(
     (scene, integrator, camera, pixels)
 }
 
+/// The samples `index .. + count` of every pixel of `pixels`, taken in
+/// lanes (in `light_pass`'s iteration, for VCM), and the sinks their
+/// splats went to.
+fn sample_in_lanes(
+    scene: &Scene,
+    integrator: &tracer::integrator::Integrator,
+    camera: &tracer::camera::Camera,
+    pixels: &[tracer::integrator::PixelSample],
+    count: u32,
+    light_pass: Option<&tracer::integrator::LightPass>,
+) -> (Vec<tracer::color::Rgb>, [tracer::integrator::SampleSink; 2]) {
+    use tracer::integrator::{SampleSink, ThreadState};
+    let mut in_lanes = vec![tracer::color::Rgb::ZERO; pixels.len() * count as usize];
+    let mut sinks = [SampleSink::default(), SampleSink::default()];
+    integrator.sample_pixels(
+        scene,
+        camera,
+        pixels,
+        count,
+        &mut in_lanes,
+        &mut sinks,
+        &mut ThreadState::default(),
+        light_pass,
+    );
+    (in_lanes, sinks)
+}
+
 /// Panics unless the samples taken in lanes are those taken alone, bit for
 /// bit, and a quarter of them at least carry light.
 fn assert_same_samples(path: &str, in_lanes: &[tracer::color::Rgb], alone: &[tracer::color::Rgb]) {
@@ -206,19 +233,8 @@ fn paths_in_lanes_are_the_paths_one_by_one() {
         // index past zero.
         let (scene, integrator, camera, pixels) = lanes_setup(path, IntegratorKind::Pt, 23, 5);
         let count = 37;
-        let mut in_lanes = vec![Rgb::ZERO; pixels.len() * count as usize];
-        let mut sinks = [SampleSink::default(), SampleSink::default()];
+        let (in_lanes, _) = sample_in_lanes(&scene, &integrator, &camera, &pixels, count, None);
         let mut state = ThreadState::default();
-        integrator.sample_pixels(
-            &scene,
-            &camera,
-            &pixels,
-            count,
-            &mut in_lanes,
-            &mut sinks,
-            &mut state,
-            None,
-        );
         let mut sink = SampleSink::default();
         let alone: Vec<Rgb> = pixels
             .iter()
@@ -243,19 +259,9 @@ fn bdpt_samples_in_lanes_are_the_samples_one_by_one() {
         // odd first index, so both halves get samples from every batch.
         let (scene, integrator, camera, pixels) = lanes_setup(path, IntegratorKind::Bdpt, 23, 5);
         let count = 37;
-        let mut in_lanes = vec![Rgb::ZERO; pixels.len() * count as usize];
-        let mut lane_sinks = [SampleSink::default(), SampleSink::default()];
+        let (in_lanes, lane_sinks) =
+            sample_in_lanes(&scene, &integrator, &camera, &pixels, count, None);
         let mut state = ThreadState::default();
-        integrator.sample_pixels(
-            &scene,
-            &camera,
-            &pixels,
-            count,
-            &mut in_lanes,
-            &mut lane_sinks,
-            &mut state,
-            None,
-        );
         let mut sinks = [SampleSink::default(), SampleSink::default()];
         let mut alone = Vec::new();
         for p in &pixels {
@@ -309,19 +315,8 @@ fn vcm_samples_in_lanes_are_the_samples_one_by_one() {
         let pass = integrator
             .light_pass(&scene, &camera, 17, index, None)
             .expect("VCM has a light pass");
-        let mut in_lanes = vec![Rgb::ZERO; pixels.len()];
-        let mut sinks = [SampleSink::default(), SampleSink::default()];
+        let (in_lanes, _) = sample_in_lanes(&scene, &integrator, &camera, &pixels, 1, Some(&pass));
         let mut state = ThreadState::default();
-        integrator.sample_pixels(
-            &scene,
-            &camera,
-            &pixels,
-            1,
-            &mut in_lanes,
-            &mut sinks,
-            &mut state,
-            Some(&pass),
-        );
         let mut sink = SampleSink::default();
         let alone: Vec<Rgb> = pixels
             .iter()

@@ -21,7 +21,6 @@
 mod grid;
 
 use super::bdpt::{start_camera_walk, Bidirectional};
-use super::bdpt_lanes::LaneState;
 use super::mis::mis;
 use super::sink::SampleSink;
 use super::walk::{light_paths_per_pass, LightVertex, MergeWeights, Walk};
@@ -55,6 +54,14 @@ pub struct VertexMerging {
 }
 
 impl VertexMerging {
+    /// BDPT with the same depth bound: VCM's camera walks and
+    /// connections are its own.
+    pub(super) fn bdpt(&self) -> Bidirectional {
+        Bidirectional {
+            max_depth: self.max_depth,
+        }
+    }
+
     /// The first iteration's merging radius for `scene`.
     pub fn base_radius(&self, scene: &Scene) -> f32 {
         self.radius.unwrap_or_else(|| {
@@ -88,9 +95,7 @@ impl VertexMerging {
         let (lowest, highest) = radius_limits(paths);
         let radius = self.radius_at(scene, index).clamp(lowest, highest);
         let merging = MergeWeights::new(radius, paths);
-        let bdpt = Bidirectional {
-            max_depth: self.max_depth,
-        };
+        let bdpt = self.bdpt();
         let (width, height) = (camera.width(), camera.height());
         let mut pass = previous.unwrap_or_default();
         pass.rows.resize_with(height as usize, Row::default);
@@ -140,34 +145,9 @@ impl VertexMerging {
         else {
             return Rgb::ZERO;
         };
-        let bdpt = Bidirectional {
-            max_depth: self.max_depth,
-        };
+        let bdpt = self.bdpt();
         let own = pass.path_of(pixel.x, pixel.y);
         bdpt.trace_camera_path::<true>(scene, walk, &mut sampler, own, Some(pass), index, sink)
-    }
-}
-
-impl VertexMerging {
-    /// The camera paths of `pixels[p]`'s samples `index .. + count` in the
-    /// iteration whose light pass is `pass`, sixteen at a time (see
-    /// `bdpt_lanes.rs`): `out[p * count + i]` gets what
-    /// [`VertexMerging::sample`] returns for sample `index + i`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn sample_pixels(
-        &self,
-        scene: &Scene,
-        camera: &Camera,
-        pixels: &[PixelSample],
-        count: u32,
-        out: &mut [Rgb],
-        pass: &LightPass,
-        lanes: &mut LaneState,
-    ) {
-        let bdpt = Bidirectional {
-            max_depth: self.max_depth,
-        };
-        bdpt.sample_pixels_merging(scene, camera, pixels, count, out, pass, lanes);
     }
 }
 
