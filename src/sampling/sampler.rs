@@ -19,7 +19,7 @@
 
 use sobol_burley::parts;
 use std::sync::OnceLock;
-use wide::{f32x8, u32x8};
+use wide::{f32x8, u32x4, u32x8};
 
 /// Hash of 32-bit words (a variant of the lowbias32 finaliser by C. Wellons).
 pub const fn hash(mut x: u32) -> u32 {
@@ -88,34 +88,90 @@ fn sobol_tables() -> &'static SobolTables {
 /// The crate's per-dimension constants of its scramble (dimension set 0).
 const DIMENSION_KEYS: [u32; 4] = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8];
 
-/// The unscrambled Sobol point of the shuffle of `index_reversed` by
-/// `seed`, as the crate's `sample_4d` finds it: the index's Owen shuffle
-/// (a statistically independent sequence per seed), then two table lookups.
+/// The unscrambled Sobol points of the shuffles of `index_reversed` by the
+/// four `seeds`, as the crate's `sample_4d` finds them: the index's Owen
+/// shuffle (a statistically independent sequence per seed), then two table
+/// lookups. The four shuffles are made in one SIMD pass.
 #[inline(always)]
-fn sobol_point(tables: &SobolTables, index_reversed: u32, seed: u32) -> [u32; 4] {
-    let shuffled = parts::owen_scramble_rev(index_reversed, parts::hash(seed ^ 0x79c6_8e4a));
-    let high = tables.high[(shuffled >> 24) as usize];
-    let low = tables.low[((shuffled >> 16) & 0xff) as usize];
-    [0, 1, 2, 3].map(|d| high[d] ^ low[d])
+fn sobol_points(tables: &SobolTables, index_reversed: u32, seeds: u32x4) -> [u32x4; 4] {
+    let shuffle = hash_4(seeds ^ u32x4::splat(0x79c6_8e4a));
+    let shuffled = owen_scramble_4(u32x4::splat(index_reversed), shuffle).to_array();
+    shuffled.map(|s| {
+        u32x4::new(tables.high[(s >> 24) as usize])
+            ^ u32x4::new(tables.low[((s >> 16) & 0xff) as usize])
+    })
 }
 
-/// Two groups of four Owen-scrambled Sobol dimensions, for the seeds of
-/// consecutive groups: lanes 0-3 are exactly `sobol_burley::sample_4d(index,
-/// 0, seeds[0])` and lanes 4-7 those for `seeds[1]` (a test checks it), for
-/// `index_reversed` = `index.reverse_bits()`. The crate's scramble, hash and
-/// bit reversal, step for step, in the eight lanes of one AVX register
-/// rather than twice in four.
-#[inline]
-fn sample_8d(tables: &SobolTables, index_reversed: u32, seeds: [u32; 2]) -> [f32; 8] {
-    let [a, b] = seeds.map(|seed| sobol_point(tables, index_reversed, seed));
+/// Two groups from their Sobol points `a` and `b` and their seeds: the
+/// crate's scramble, hash and bit reversal, step for step, in the eight
+/// lanes of one AVX register rather than twice in four.
+#[inline(always)]
+fn scrambled_pair(a: u32x4, b: u32x4, seed_a: u32, seed_b: u32) -> [f32; 8] {
+    let (a, b) = (a.to_array(), b.to_array());
     let sobol = u32x8::new([a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]);
-    let [s0, s1] = seeds.map(|seed| seed.wrapping_mul(0x9c8f_2d3b));
+    let [sa, sb] = [seed_a, seed_b].map(|seed| seed.wrapping_mul(0x9c8f_2d3b));
     let k = DIMENSION_KEYS;
-    let scramble = u32x8::new([s0, s0, s0, s0, s1, s1, s1, s1])
+    let scramble = u32x8::new([sa, sa, sa, sa, sb, sb, sb, sb])
         ^ u32x8::new([k[0], k[1], k[2], k[3], k[0], k[1], k[2], k[3]]);
     let scrambled = owen_scramble_8(sobol, hash_8(scramble));
     let bits = (reverse_bits_8(scrambled) >> 9) | u32x8::splat(0x3f80_0000);
     (bytemuck::cast::<u32x8, f32x8>(bits) - f32x8::ONE).to_array()
+}
+
+/// Two groups of four Owen-scrambled Sobol dimensions, for the first two
+/// of four group seeds: numbers 0-3 are exactly
+/// `sobol_burley::sample_4d(index, 0, seeds[0])` and 4-7 those for
+/// `seeds[1]` (a test checks it), for `index_reversed` =
+/// `index.reverse_bits()`.
+#[inline]
+fn sample_8d(tables: &SobolTables, index_reversed: u32, seeds: u32x4) -> [f32; 8] {
+    let [a, b, ..] = sobol_points(tables, index_reversed, seeds);
+    let [s0, s1, ..] = seeds.to_array();
+    scrambled_pair(a, b, s0, s1)
+}
+
+/// Four groups, as [`sample_8d`] makes two: numbers `4 * k .. 4 * k + 4`
+/// are `sobol_burley::sample_4d(index, 0, seeds[k])`.
+#[inline(always)]
+fn sample_16d(tables: &SobolTables, index_reversed: u32, seeds: u32x4) -> [f32; 16] {
+    let [a, b, c, d] = sobol_points(tables, index_reversed, seeds);
+    let [s0, s1, s2, s3] = seeds.to_array();
+    let mut out = [0.0; 16];
+    out[..8].copy_from_slice(&scrambled_pair(a, b, s0, s1));
+    out[8..].copy_from_slice(&scrambled_pair(c, d, s2, s3));
+    out
+}
+
+/// `parts::hash` on four lanes.
+#[inline(always)]
+fn hash_4(mut n: u32x4) -> u32x4 {
+    n ^= u32x4::splat(0xe6fe_3beb);
+    n ^= n >> 16;
+    n *= u32x4::splat(0x7feb_352d);
+    n ^= n >> 15;
+    n *= u32x4::splat(0x846c_a68b);
+    n ^ (n >> 16)
+}
+
+/// `parts::owen_scramble_rev` on four lanes.
+#[inline(always)]
+fn owen_scramble_4(mut n: u32x4, scramble: u32x4) -> u32x4 {
+    n ^= n * u32x4::splat(0x3d20_adea);
+    n += scramble;
+    n *= (scramble >> 16) | u32x4::ONE;
+    n ^= n * u32x4::splat(0x0552_6c56);
+    n ^ (n * u32x4::splat(0x53a2_2864))
+}
+
+/// [`hash`] (the sampler's own, not the crate's) on four lanes.
+#[inline(always)]
+fn group_hash_4(mut x: u32x4) -> u32x4 {
+    x ^= x >> 16;
+    x *= u32x4::splat(0x21f0_aaad);
+    x ^= x >> 15;
+    x *= u32x4::splat(0x735a_2d97);
+    x ^= x >> 15;
+    x
 }
 
 /// `parts::hash_int4` on eight lanes.
@@ -217,14 +273,14 @@ impl Sampler {
         }
     }
 
-    /// The seed of group `g`.
+    /// The seeds of groups `g` to `g + 3`, in one SIMD pass.
     #[inline(always)]
-    fn group_seed(&self, g: u32) -> u32 {
-        let key = match GROUP_KEYS.get(g as usize) {
-            Some(&key) => key,
-            None => combine_key(g),
+    fn group_seeds_4(&self, g: u32) -> u32x4 {
+        let keys = match GROUP_KEYS.get(g as usize..g as usize + 4) {
+            Some(&[a, b, c, d]) => [a, b, c, d],
+            _ => [g, g + 1, g + 2, g + 3].map(combine_key),
         };
-        hash(self.pixel_seed ^ key)
+        group_hash_4(u32x4::splat(self.pixel_seed) ^ u32x4::new(keys))
     }
 
     /// A number in [0, 1).
@@ -272,11 +328,8 @@ impl Sampler {
         let second = (vertex & 1) as usize;
         if second == 0 {
             let g = VERTEX_GROUPS + 2 * vertex;
-            let seeds = [g, g + 1, g + 2, g + 3].map(|g| self.group_seed(g));
-            let first = sample_8d(self.tables, self.index_reversed, [seeds[0], seeds[1]]);
-            let last = sample_8d(self.tables, self.index_reversed, [seeds[2], seeds[3]]);
-            self.vertex_groups[..8].copy_from_slice(&first);
-            self.vertex_groups[8..].copy_from_slice(&last);
+            self.vertex_groups =
+                sample_16d(self.tables, self.index_reversed, self.group_seeds_4(g));
         }
         let c = &self.vertex_groups;
         let own = 4 + 4 * second;
@@ -317,7 +370,7 @@ impl Sampler {
             self.vertices == 0 || self.group + 2 <= VERTEX_GROUPS,
             "draws in turn reached the vertices' groups"
         );
-        let seeds = [self.group_seed(self.group), self.group_seed(self.group + 1)];
+        let seeds = self.group_seeds_4(self.group);
         self.cached = sample_8d(self.tables, self.index_reversed, seeds);
         self.group += 2;
         self.used = 0;
@@ -344,10 +397,17 @@ mod tests {
         for index in (0..SEQUENCE_LENGTH).step_by(7).chain([SEQUENCE_LENGTH - 1]) {
             let seeds = [hash(seed), hash(hash(seed))];
             seed = seeds[1];
-            let ours = sample_8d(tables, index.reverse_bits(), seeds).map(f32::to_bits);
-            for (half, seed) in seeds.into_iter().enumerate() {
+            let four = [seeds[0], seeds[1], hash(seeds[0] ^ 1), hash(seeds[1] ^ 2)];
+            let ours = sample_16d(tables, index.reverse_bits(), u32x4::new(four));
+            let pair = sample_8d(tables, index.reverse_bits(), u32x4::new(four));
+            assert_eq!(
+                pair.map(f32::to_bits).to_vec(),
+                ours[..8].iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+            );
+            for (k, seed) in four.into_iter().enumerate() {
                 let crate_4d = sobol_burley::sample_4d(index, 0, seed).map(f32::to_bits);
-                assert_eq!(ours[4 * half..4 * half + 4], crate_4d, "index {index}");
+                let ours_4d: [f32; 4] = ours[4 * k..4 * k + 4].try_into().unwrap();
+                assert_eq!(ours_4d.map(f32::to_bits), crate_4d, "index {index}");
             }
         }
     }
