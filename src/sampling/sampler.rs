@@ -18,6 +18,7 @@
 //! what the crate's bit-by-bit loop gives, bit for bit.
 
 use sobol_burley::parts;
+use std::ops::{AddAssign, BitOr, BitXor, BitXorAssign, Mul, MulAssign, Shr};
 use std::sync::OnceLock;
 use wide::{f32x8, u32x4, u32x8};
 
@@ -94,8 +95,8 @@ const DIMENSION_KEYS: [u32; 4] = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_
 /// lookups. The four shuffles are made in one SIMD pass.
 #[inline(always)]
 fn sobol_points(tables: &SobolTables, index_reversed: u32, seeds: u32x4) -> [u32x4; 4] {
-    let shuffle = hash_4(seeds ^ u32x4::splat(0x79c6_8e4a));
-    let shuffled = owen_scramble_4(u32x4::splat(index_reversed), shuffle).to_array();
+    let shuffle = crate_hash(seeds ^ u32x4::splat(0x79c6_8e4a));
+    let shuffled = owen_scramble(u32x4::splat(index_reversed), shuffle).to_array();
     shuffled.map(|s| {
         u32x4::new(tables.high[(s >> 24) as usize])
             ^ u32x4::new(tables.low[((s >> 16) & 0xff) as usize])
@@ -113,7 +114,7 @@ fn scrambled_pair(a: u32x4, b: u32x4, seed_a: u32, seed_b: u32) -> [f32; 8] {
     let k = DIMENSION_KEYS;
     let scramble = u32x8::new([sa, sa, sa, sa, sb, sb, sb, sb])
         ^ u32x8::new([k[0], k[1], k[2], k[3], k[0], k[1], k[2], k[3]]);
-    let scrambled = owen_scramble_8(sobol, hash_8(scramble));
+    let scrambled = owen_scramble(sobol, crate_hash(scramble));
     let bits = (reverse_bits_8(scrambled) >> 9) | u32x8::splat(0x3f80_0000);
     (bytemuck::cast::<u32x8, f32x8>(bits) - f32x8::ONE).to_array()
 }
@@ -142,28 +143,58 @@ fn sample_16d(tables: &SobolTables, index_reversed: u32, seeds: u32x4) -> [f32; 
     out
 }
 
-/// `parts::hash` on four lanes.
+/// The integer SIMD types the scramble runs on: four lanes (one group
+/// per lane, for seeds and index shuffles) and eight (two groups of four
+/// dimensions). Both take the same steps, written once below.
+trait Lanes:
+    Copy
+    + BitXor<Output = Self>
+    + BitXorAssign
+    + BitOr<Output = Self>
+    + Shr<u32, Output = Self>
+    + Mul<Output = Self>
+    + MulAssign
+    + AddAssign
+{
+    fn splat(x: u32) -> Self;
+}
+
+impl Lanes for u32x4 {
+    #[inline(always)]
+    fn splat(x: u32) -> Self {
+        u32x4::splat(x)
+    }
+}
+
+impl Lanes for u32x8 {
+    #[inline(always)]
+    fn splat(x: u32) -> Self {
+        u32x8::splat(x)
+    }
+}
+
+/// `parts::hash` (the crate's, not this module's [`hash`]) on every lane.
 #[inline(always)]
-fn hash_4(mut n: u32x4) -> u32x4 {
-    n ^= u32x4::splat(0xe6fe_3beb);
+fn crate_hash<L: Lanes>(mut n: L) -> L {
+    n ^= L::splat(0xe6fe_3beb);
     n ^= n >> 16;
-    n *= u32x4::splat(0x7feb_352d);
+    n *= L::splat(0x7feb_352d);
     n ^= n >> 15;
-    n *= u32x4::splat(0x846c_a68b);
+    n *= L::splat(0x846c_a68b);
     n ^ (n >> 16)
 }
 
-/// `parts::owen_scramble_rev` on four lanes.
+/// `parts::owen_scramble_rev` on every lane.
 #[inline(always)]
-fn owen_scramble_4(mut n: u32x4, scramble: u32x4) -> u32x4 {
-    n ^= n * u32x4::splat(0x3d20_adea);
+fn owen_scramble<L: Lanes>(mut n: L, scramble: L) -> L {
+    n ^= n * L::splat(0x3d20_adea);
     n += scramble;
-    n *= (scramble >> 16) | u32x4::ONE;
-    n ^= n * u32x4::splat(0x0552_6c56);
-    n ^ (n * u32x4::splat(0x53a2_2864))
+    n *= (scramble >> 16) | L::splat(1);
+    n ^= n * L::splat(0x0552_6c56);
+    n ^ (n * L::splat(0x53a2_2864))
 }
 
-/// [`hash`] (the sampler's own, not the crate's) on four lanes.
+/// This module's [`hash`] on four lanes.
 #[inline(always)]
 fn group_hash_4(mut x: u32x4) -> u32x4 {
     x ^= x >> 16;
@@ -172,27 +203,6 @@ fn group_hash_4(mut x: u32x4) -> u32x4 {
     x *= u32x4::splat(0x735a_2d97);
     x ^= x >> 15;
     x
-}
-
-/// `parts::hash_int4` on eight lanes.
-#[inline(always)]
-fn hash_8(mut n: u32x8) -> u32x8 {
-    n ^= u32x8::splat(0xe6fe_3beb);
-    n ^= n >> 16;
-    n *= u32x8::splat(0x7feb_352d);
-    n ^= n >> 15;
-    n *= u32x8::splat(0x846c_a68b);
-    n ^ (n >> 16)
-}
-
-/// `parts::owen_scramble_int4_rev` on eight lanes.
-#[inline(always)]
-fn owen_scramble_8(mut n: u32x8, scramble: u32x8) -> u32x8 {
-    n ^= n * u32x8::splat(0x3d20_adea);
-    n += scramble;
-    n *= (scramble >> 16) | u32x8::ONE;
-    n ^= n * u32x8::splat(0x0552_6c56);
-    n ^ (n * u32x8::splat(0x53a2_2864))
 }
 
 /// `u32::reverse_bits` of each lane: swap ever larger halves.
