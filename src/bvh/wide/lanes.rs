@@ -106,8 +106,11 @@ fn blocked_lanes(rays: &[Ray; LANES], active: u32, occluded: impl Fn(&Ray) -> bo
 /// Calls `f` with each lane whose bit is set in `mask`, lowest first.
 #[inline(always)]
 pub fn for_lanes(mut mask: u32, mut f: impl FnMut(usize)) {
+    debug_assert!(mask >> LANES == 0, "a lane past the last");
     while mask != 0 {
-        f(mask.trailing_zeros() as usize);
+        // Masked, so the compiler knows each lane indexes a lane array
+        // in bounds and drops the checks.
+        f(mask.trailing_zeros() as usize & (LANES - 1));
         mask &= mask - 1;
     }
 }
