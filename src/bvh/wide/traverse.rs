@@ -139,13 +139,14 @@ pub(super) fn safe_inverse(c: f32) -> f32 {
 /// rather than three scalar ones, and no branch (the same numbers, as
 /// division rounds alike in both).
 #[inline(always)]
-fn safe_inverses(d: [f32; 3]) -> [f32; 3] {
+fn safe_inverses(d: [f32; 3]) -> ([f32; 3], u32) {
     let c = f32x4::new([d[0], d[1], d[2], 1.0]);
     let tiny = f32x4::splat(1e-20);
     let stand_in = (c & f32x4::splat(-0.0)) | tiny;
     let c = c.abs().simd_lt(tiny).select(stand_in, c);
-    let [x, y, z, _] = (f32x4::ONE / c).to_array();
-    [x, y, z]
+    let inverses = f32x4::ONE / c;
+    let [x, y, z, _] = inverses.to_array();
+    ([x, y, z], inverses.to_bitmask())
 }
 
 /// The edge functions `u`, `v`, `w` of the watertight test, recomputed in
@@ -210,9 +211,10 @@ impl RayLanes {
     pub(super) fn new(ray: &Ray) -> RayLanes {
         let d = ray.dir.to_array();
         let o = ray.origin.to_array();
-        let inv = safe_inverses(d);
+        let (inv, signs) = safe_inverses(d);
         let (k, s) = RayShear::new(ray.origin, ray.dir).parts();
-        let negative = inv.map(|i| usize::from(i < 0.0));
+        // The inverses are never zero or NaN: a set sign bit is a negative one.
+        let negative = [0, 1, 2].map(|a| (signs >> a) as usize & 1);
         let near_row = [0, 1, 2].map(|a| a + 3 * negative[a]);
         RayLanes {
             origin: o.map(f32x8::splat),
