@@ -380,6 +380,9 @@ impl Sampler {
             self.vertices == 0 || self.group + 2 <= VERTEX_GROUPS,
             "draws in turn reached the vertices' groups"
         );
+        // The four-lane pass makes four seeds and points; a refill uses the
+        // first two, the others riding along in the same instructions (two
+        // table lookups aside).
         let seeds = self.group_seeds_4(self.group);
         self.cached = sample_8d(self.tables, self.index_reversed, seeds);
         self.group += 2;
@@ -410,10 +413,8 @@ mod tests {
             let four = [seeds[0], seeds[1], hash(seeds[0] ^ 1), hash(seeds[1] ^ 2)];
             let ours = sample_16d(tables, index.reverse_bits(), u32x4::new(four));
             let pair = sample_8d(tables, index.reverse_bits(), u32x4::new(four));
-            assert_eq!(
-                pair.map(f32::to_bits).to_vec(),
-                ours[..8].iter().map(|x| x.to_bits()).collect::<Vec<_>>()
-            );
+            let first_two: [f32; 8] = ours[..8].try_into().unwrap();
+            assert_eq!(pair.map(f32::to_bits), first_two.map(f32::to_bits));
             for (k, seed) in four.into_iter().enumerate() {
                 let crate_4d = sobol_burley::sample_4d(index, 0, seed).map(f32::to_bits);
                 let ours_4d: [f32; 4] = ours[4 * k..4 * k + 4].try_into().unwrap();

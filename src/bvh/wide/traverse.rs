@@ -137,7 +137,8 @@ pub(super) fn safe_inverse(c: f32) -> f32 {
 
 /// [`safe_inverse`] of the three components at once: one vector division
 /// rather than three scalar ones, and no branch (the same numbers, as
-/// division rounds alike in both).
+/// division rounds alike in both). Also returns the inverses' sign bits
+/// (bit a for axis a), which the slab test's row choice reads.
 #[inline(always)]
 fn safe_inverses(d: [f32; 3]) -> ([f32; 3], u32) {
     let c = f32x4::new([d[0], d[1], d[2], 1.0]);
@@ -213,7 +214,8 @@ impl RayLanes {
         let o = ray.origin.to_array();
         let (inv, signs) = safe_inverses(d);
         let (k, s) = RayShear::new(ray.origin, ray.dir).parts();
-        // The inverses are never zero or NaN: a set sign bit is a negative one.
+        // For a finite direction the inverses are never zero or NaN, so a
+        // set sign bit is exactly a negative inverse.
         let negative = [0, 1, 2].map(|a| (signs >> a) as usize & 1);
         let near_row = [0, 1, 2].map(|a| a + 3 * negative[a]);
         RayLanes {
