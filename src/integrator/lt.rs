@@ -74,7 +74,7 @@ fn splat_light_point(
     };
     let le = light.emitted(c.dir_to_camera);
     let cos = c.dir_to_camera.dot(light.normal).abs();
-    let light_point = Endpoint {
+    let light_point = Endpoint::Surface {
         position: emission.origin,
         normal: light.normal,
         magnitude: light.magnitude,
