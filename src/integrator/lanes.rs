@@ -11,12 +11,13 @@
 //! estimate lands in its own slot, so the image is the one-path-at-a-time
 //! path tracer's, bit for bit (a test checks it).
 
-use super::pt::CameraPath;
+use super::pt::{CameraPath, DiffuseLanes, Vertex};
 use super::{PathTracer, PixelSample};
 use crate::bvh::{for_lanes, LANES};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::Ray;
+use crate::material::Material;
 use crate::scene::Scene;
 use glam::Vec3;
 
@@ -57,6 +58,7 @@ impl PathTracer {
         let mut direct = [Rgb::ZERO; LANES];
         let mut if_blocked = [Rgb::ZERO; LANES];
         let mut hits = [None; LANES];
+        let mut diffuse = DiffuseLanes::default();
         loop {
             let mut free = !active & ALL_LANES;
             while free != 0 && next < total {
@@ -74,25 +76,46 @@ impl PathTracer {
             }
             for_lanes(active, |lane| rays[lane] = paths[lane].ray);
             scene.intersect_lanes(&rays, active, &mut hits);
-            let (mut shadowed, mut ended) = (0u32, 0u32);
+            let mut step = Step {
+                shadowed: 0,
+                ended: 0,
+                shadow_rays: &mut shadow_rays,
+                direct: &mut direct,
+                if_blocked: &mut if_blocked,
+            };
+            // Vertices on diffuse surfaces are staged and shaded together
+            // (see `pt/diffuse.rs`); the others one path at a time.
+            diffuse.clear();
+            let mut staged = 0u32;
             for_lanes(active, |lane| {
                 let path = &mut paths[lane];
-                let vertex = path.vertex(scene, hits[lane], self.max_depth);
-                if let Some(light) = vertex.direct {
-                    match light.shadow {
-                        Some(ray) => {
-                            shadow_rays[lane] = ray;
-                            direct[lane] = light.value;
-                            if_blocked[lane] = light.blocked;
-                            shadowed |= 1 << lane;
+                let Some(arrival) = path.arrive(scene, hits[lane], self.max_depth) else {
+                    step.ended |= 1 << lane;
+                    return;
+                };
+                let vertex = match &scene.materials[arrival.material as usize] {
+                    Material::Diffuse { albedo } => {
+                        match path.stage_diffuse(scene, &arrival, albedo, lane, &mut diffuse) {
+                            None => {
+                                staged |= 1 << lane;
+                                return;
+                            }
+                            Some(vertex) => vertex,
                         }
-                        None => path.add_direct(light.value),
                     }
-                }
-                if !vertex.continues {
-                    ended |= 1 << lane;
-                }
+                    _ => path.shade(scene, &arrival),
+                };
+                step.take(lane, path, vertex);
             });
+            if staged != 0 {
+                diffuse.shade();
+                for_lanes(staged, |lane| {
+                    let path = &mut paths[lane];
+                    let vertex = path.finish_diffuse(lane, &diffuse);
+                    step.take(lane, path, vertex);
+                });
+            }
+            let (shadowed, ended) = (step.shadowed, step.ended);
             let blocked = scene.occluded_lanes(&shadow_rays, shadowed);
             for_lanes(shadowed, |lane| {
                 let free = blocked & (1 << lane) == 0;
@@ -100,6 +123,39 @@ impl PathTracer {
             });
             for_lanes(ended, |lane| out[slots[lane]] = paths[lane].radiance);
             active &= !ended;
+        }
+    }
+}
+
+/// What a step's vertices leave to trace: the lanes whose light samples
+/// wait on shadow rays (with what each adds if free, and if blocked), and
+/// the lanes whose paths end.
+struct Step<'a> {
+    shadowed: u32,
+    ended: u32,
+    shadow_rays: &'a mut [Ray; LANES],
+    direct: &'a mut [Rgb; LANES],
+    if_blocked: &'a mut [Rgb; LANES],
+}
+
+impl Step<'_> {
+    /// Takes lane `lane`'s vertex: its light sample waits on its shadow
+    /// ray, or is added at once when nothing can block it.
+    #[inline(always)]
+    fn take(&mut self, lane: usize, path: &mut CameraPath, vertex: Vertex) {
+        if let Some(light) = vertex.direct {
+            match light.shadow {
+                Some(ray) => {
+                    self.shadow_rays[lane] = ray;
+                    self.direct[lane] = light.value;
+                    self.if_blocked[lane] = light.blocked;
+                    self.shadowed |= 1 << lane;
+                }
+                None => path.add_direct(light.value),
+            }
+        }
+        if !vertex.continues {
+            self.ended |= 1 << lane;
         }
     }
 }

@@ -10,6 +10,10 @@
 //! light needs 2. Russian roulette on the throughput ends long paths without
 //! bias.
 
+mod diffuse;
+
+pub(super) use diffuse::DiffuseLanes;
+
 use super::connect::{sample_lens, shadow_ray};
 use super::mis::power_heuristic;
 use super::PixelSample;
@@ -22,7 +26,7 @@ use crate::geometry::Ray;
 use crate::geometry::SurfacePoint;
 use crate::light::Light;
 use crate::material::{Bsdf, Transport};
-use crate::sampling::Sampler;
+use crate::sampling::{Sampler, VertexNumbers};
 use crate::scene::{Scene, NO_LIGHT};
 use glam::Vec3;
 
@@ -137,16 +141,32 @@ impl CameraPath {
     /// scene): light emitted there, a light sample, and the next direction.
     #[inline(always)]
     pub fn vertex(&mut self, scene: &Scene, hit: Option<Hit>, max_depth: u32) -> Vertex {
-        const END: Vertex = Vertex {
-            direct: None,
-            continues: false,
+        let Some(arrival) = self.arrive(scene, hit, max_depth) else {
+            return Vertex::END;
         };
+        self.shade(scene, &arrival)
+    }
+
+    /// The rest of the vertex at `arrival`: its BSDF, its numbers, a light
+    /// sample and the next direction.
+    #[inline(always)]
+    pub fn shade(&mut self, scene: &Scene, arrival: &Arrival) -> Vertex {
+        let bsdf = scene.materials[arrival.material as usize].bsdf(&arrival.surface, arrival.wo);
+        let numbers = self.sampler.vertex_numbers(!bsdf.is_delta());
+        self.scatter(scene, arrival, &bsdf, numbers)
+    }
+
+    /// The first part of a vertex: what the path's ray found (`hit`), and
+    /// the light emitted there towards the path. `None` where the path ends
+    /// here (it left the scene, or reached `max_depth` segments).
+    #[inline(always)]
+    pub fn arrive(&mut self, scene: &Scene, hit: Option<Hit>, max_depth: u32) -> Option<Arrival> {
         let Some(hit) = hit else {
             if scene.environment.is_some() {
                 self.radiance += self.throughput
                     * escaped(scene, self.ray.dir, self.previous_delta, self.previous_pdf);
             }
-            return END;
+            return None;
         };
         self.segments += 1;
         let surface = scene.surface(&hit);
@@ -169,16 +189,32 @@ impl CameraPath {
             }
         }
         if self.segments >= max_depth {
-            return END;
+            return None;
         }
+        Some(Arrival {
+            surface,
+            wo,
+            material: shading.material,
+        })
+    }
 
-        let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
+    /// The rest of a vertex, given its BSDF and its numbers: a light
+    /// sample, and the next direction.
+    #[inline(always)]
+    pub fn scatter(
+        &mut self,
+        scene: &Scene,
+        arrival: &Arrival,
+        bsdf: &Bsdf,
+        numbers: VertexNumbers,
+    ) -> Vertex {
+        let Arrival { surface, wo, .. } = *arrival;
+        let surface = &surface;
         // The shadow ray is the caller's to trace: a single path traces it
         // after this step, so the next direction's chain of divisions and
         // square roots runs while it is traversed (see `Walk::follow` for
         // what that measured); the lanes trace sixteen paths' shadow rays
         // together.
-        let numbers = self.sampler.vertex_numbers(!bsdf.is_delta());
         let sampled = bsdf.sample(wo, numbers.direction, numbers.lobe, Transport::Radiance);
         let mut direct = None;
         if let Some((u_select, u_point)) = numbers.light {
@@ -186,7 +222,7 @@ impl CameraPath {
             // zero, unless the throughput has overflowed, when it makes
             // the sample NaN, and the renderer discards it.
             let nothing = self.throughput * Rgb::ZERO;
-            match direct_light(scene, &surface, &bsdf, wo, u_select, u_point) {
+            match direct_light(scene, surface, bsdf, wo, u_select, u_point) {
                 Some((value, shadow)) => {
                     direct = Some(DirectLight {
                         value: self.throughput * value,
@@ -229,6 +265,23 @@ impl CameraPath {
         }
         Vertex { direct, continues }
     }
+}
+
+/// Where a path's ray arrived, for the rest of its vertex: the surface,
+/// the direction back along the ray, and the surface's material.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Arrival {
+    pub surface: SurfacePoint,
+    pub wo: Vec3,
+    pub material: u32,
+}
+
+impl Vertex {
+    /// A vertex where the path ends, with no light sample.
+    pub const END: Vertex = Vertex {
+        direct: None,
+        continues: false,
+    };
 }
 
 /// The environment seen along `dir` by a ray that left the scene, weighted
