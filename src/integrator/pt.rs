@@ -11,6 +11,7 @@
 //! bias.
 
 mod diffuse;
+mod simd;
 
 pub(super) use diffuse::DiffuseLanes;
 
