@@ -7,6 +7,10 @@
 //! ends takes the next path at once (path regeneration), so lanes stay
 //! busy however unequal the paths' lengths.
 //!
+//! The paths whose rays land on Lambertian surfaces are also shaded
+//! together, eight lanes per SIMD operation (`pt/diffuse.rs`), with each
+//! lane's arithmetic that of the one-path vertex.
+//!
 //! Every path is a pure function of its pixel and sample index, and its
 //! estimate lands in its own slot, so the image is the one-path-at-a-time
 //! path tracer's, bit for bit (a test checks it).

@@ -14,9 +14,11 @@
 //! scene. Other materials, and light samples of lights other than
 //! emissive triangles, take the scalar vertex.
 //!
-//! Scalar, each vertex spends some 500 instructions building its BSDF,
-//! sampling it, sampling the light and weighing the two; here the staging
-//! (a store per number) and the shared arithmetic cost a fraction of that.
+//! Why: one path's vertex repeats, scalar, the arithmetic of fifteen
+//! others. Shading them together saves about 330 instructions per diffuse
+//! vertex net of the staging (perf gate's `render-cornell-pt`, 17% of the
+//! path tracer's instructions; docs/benchmarks.md, "The path tracer's
+//! diffuse vertices in SIMD lanes").
 
 use super::simd::{
     cosine_hemisphere, get3, lane_mask, offset_origin, oriented_frame, power_heuristic, roulette,
