@@ -182,13 +182,71 @@ impl Bidirectional {
         sink: &mut SampleSink,
         connect: &mut impl FnMut(Option<Ray>, Share, &mut Rgb, &mut SampleSink),
     ) -> bool {
-        let CameraVertex {
-            scene,
-            light_vertices,
-            merges,
-            pixel,
-        } = at;
-        let max_depth = self.max_depth;
+        let Some(arrival) = self.camera_arrive(at, walk, hit, result, sink) else {
+            return false;
+        };
+        self.camera_scatter::<MERGE>(at, walk, sampler, arrival, result, sink, connect)
+    }
+
+    /// The rest of a camera vertex after `camera_arrive`: the strategies
+    /// s > 0 to `connect`, and the walk followed. Returns whether it goes on.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn camera_scatter<const MERGE: bool>(
+        &self,
+        at: CameraVertex,
+        walk: &mut Walk,
+        sampler: &mut Sampler,
+        (surface, wo, material): (SurfacePoint, Vec3, u32),
+        result: &mut Rgb,
+        sink: &mut SampleSink,
+        connect: &mut impl FnMut(Option<Ray>, Share, &mut Rgb, &mut SampleSink),
+    ) -> bool {
+        let bsdf = at.scene.materials[material as usize].bsdf(&surface, wo);
+        // The vertex's numbers (see `Sampler::vertex_numbers`), and the
+        // next direction before the shadow rays (see `Walk::follow`).
+        let numbers = sampler.vertex_numbers(!bsdf.is_delta());
+        let sampled = bsdf.sample(wo, numbers.direction, numbers.lobe, Transport::Radiance);
+        if let Some((u_select, u_point)) = numbers.light {
+            // A strategy that adds nothing, or whose ray is blocked, still
+            // adds the throughputs times zero: zero, unless a throughput has
+            // overflowed, when it makes the sample NaN, and the renderer
+            // discards it.
+            let (l, weight, ray) =
+                light_sample(at.scene, &surface, &bsdf, wo, walk, u_select, u_point);
+            connect(ray, Share::light_sample(walk, l, weight), result, sink);
+            self.connect_light_vertices::<MERGE>(
+                at, walk, &surface, &bsdf, wo, result, sink, connect,
+            );
+        }
+        if !walk.follow(
+            sampled,
+            &bsdf,
+            &surface,
+            wo,
+            numbers.roulette,
+            Transport::Radiance,
+        ) {
+            return false;
+        }
+        walk.length += 1;
+        true
+    }
+
+    /// The first part of a camera vertex: s = 0 (the light the walk's ray
+    /// found, or the sky it left for) into `result`, the walk's weights
+    /// carried to the vertex; then the surface, the direction back along
+    /// the ray and the material, unless the walk ends here.
+    #[inline(always)]
+    pub(super) fn camera_arrive(
+        &self,
+        at: CameraVertex,
+        walk: &mut Walk,
+        hit: Option<Hit>,
+        result: &mut Rgb,
+        sink: &mut SampleSink,
+    ) -> Option<(SurfacePoint, Vec3, u32)> {
+        let CameraVertex { scene, pixel, .. } = at;
         // Adds one strategy's share; `t` counts the camera's vertices, the pinhole included.
         let add = |result: &mut Rgb,
                    (unweighted, weight): Weighted,
@@ -209,7 +267,7 @@ impl Bidirectional {
                     sink,
                 );
             }
-            return false;
+            return None;
         };
         let surface = scene.surface(&hit);
         let wo = -walk.dir;
@@ -221,64 +279,49 @@ impl Bidirectional {
             let (le, weight) = hit_emitter(scene, shading.light as usize, wo, walk);
             add(result, (walk.throughput * le, weight), 0, t, sink);
         }
-        if walk.length >= max_depth {
-            return false;
+        if walk.length >= self.max_depth {
+            return None;
         }
-        let bsdf = scene.materials[shading.material as usize].bsdf(&surface, wo);
-        // The vertex's numbers (see `Sampler::vertex_numbers`), and the
-        // next direction before the shadow rays (see `Walk::follow`).
-        let numbers = sampler.vertex_numbers(!bsdf.is_delta());
-        let sampled = bsdf.sample(wo, numbers.direction, numbers.lobe, Transport::Radiance);
-        if let Some((u_select, u_point)) = numbers.light {
-            // A strategy that adds nothing, or whose ray is blocked, still
-            // adds the throughputs times zero: zero, unless a throughput has
-            // overflowed, when it makes the sample NaN, and the renderer
-            // discards it.
-            let (l, weight, ray) =
-                light_sample(scene, &surface, &bsdf, wo, walk, u_select, u_point);
+        Some((surface, wo, shading.material))
+    }
+
+    /// s > 1 at a camera vertex: a connection to each stored light vertex
+    /// the path length allows, then VCM's merges (`MERGE`), to `connect`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn connect_light_vertices<const MERGE: bool>(
+        &self,
+        at: CameraVertex,
+        walk: &Walk,
+        surface: &SurfacePoint,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        result: &mut Rgb,
+        sink: &mut SampleSink,
+        connect: &mut impl FnMut(Option<Ray>, Share, &mut Rgb, &mut SampleSink),
+    ) {
+        let t = walk.length + 1;
+        for v in at.light_vertices {
+            if v.length + 1 + walk.length > self.max_depth {
+                break;
+            }
+            let (l, weight, ray) = connect_vertices(surface, bsdf, wo, walk, v);
+            let throughput = walk.throughput * v.throughput;
             let share = Share {
-                value: walk.throughput * l,
+                value: throughput * l,
                 weight,
-                blocked: walk.throughput * Rgb::ZERO,
-                s: 1,
+                blocked: throughput * Rgb::ZERO,
+                s: v.length + 1,
                 t,
                 recorded: true,
             };
             connect(ray, share, result, sink);
-            for v in light_vertices {
-                if v.length + 1 + walk.length > max_depth {
-                    break;
-                }
-                let (l, weight, ray) = connect_vertices(&surface, &bsdf, wo, walk, v);
-                let throughput = walk.throughput * v.throughput;
-                let share = Share {
-                    value: throughput * l,
-                    weight,
-                    blocked: throughput * Rgb::ZERO,
-                    s: v.length + 1,
-                    t,
-                    recorded: true,
-                };
-                connect(ray, share, result, sink);
-            }
-            if let Some(pass) = merges.filter(|_| MERGE) {
-                // After the connections, whenever the caller adds them.
-                let merged = walk.throughput * pass.merge(&surface, &bsdf, wo, walk, max_depth);
-                connect(None, Share::merges(merged), result, sink);
-            }
         }
-        if !walk.follow(
-            sampled,
-            &bsdf,
-            &surface,
-            wo,
-            numbers.roulette,
-            Transport::Radiance,
-        ) {
-            return false;
+        if let Some(pass) = at.merges.filter(|_| MERGE) {
+            // After the connections, whenever the caller adds them.
+            let merged = walk.throughput * pass.merge(surface, bsdf, wo, walk, self.max_depth);
+            connect(None, Share::merges(merged), result, sink);
         }
-        walk.length += 1;
-        true
     }
 }
 
@@ -311,6 +354,20 @@ pub(super) struct Share {
 }
 
 impl Share {
+    /// s = 1 at the camera vertex of `walk`: `light_sample`'s estimate
+    /// `l` with its weight, times the walk's throughput.
+    #[inline(always)]
+    pub(super) fn light_sample(walk: &Walk, l: Rgb, weight: f32) -> Share {
+        Share {
+            value: walk.throughput * l,
+            weight,
+            blocked: walk.throughput * Rgb::ZERO,
+            s: 1,
+            t: walk.length + 1,
+            recorded: true,
+        }
+    }
+
     /// VCM's merges at a vertex, weighted and with the throughput: they
     /// need no shadow ray, but come after the vertex's connections.
     #[inline(always)]
@@ -448,7 +505,7 @@ fn escaped(scene: &Scene, dir: Vec3, walk: &Walk) -> Weighted {
 /// `u_select` chooses the light, `u_point` the point on it. Returns the
 /// estimate and its weight should the shadow ray (`None`: nothing can
 /// block it) be free; a sample that adds nothing has no ray.
-fn light_sample(
+pub(super) fn light_sample(
     scene: &Scene,
     surface: &SurfacePoint,
     bsdf: &Bsdf,

@@ -13,7 +13,10 @@
 //! all three). VCM's camera paths take the same camera lanes, after the
 //! iteration's light pass, each connecting to its own pixel's light path.
 
-use super::bdpt::{camera_splat_weight, start_camera_walk, Bidirectional, CameraVertex, Share};
+use super::bdpt::{
+    camera_splat_weight, light_sample, start_camera_walk, Bidirectional, CameraVertex, Share,
+};
+use super::bdpt_diffuse::DiffuseCameraLanes;
 use super::light_path::{begin_light_path, camera_splat_unshadowed, light_vertex, looks_further};
 use super::sink::SampleSink;
 use super::vcm::{LightPass, VertexMerging};
@@ -23,6 +26,8 @@ use crate::bvh::{for_lanes, Hit, LANES};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::Ray;
+use crate::light::Light;
+use crate::material::Material;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -184,6 +189,7 @@ impl Bidirectional {
         let unused = Ray::new(Vec3::ZERO, Vec3::Z);
         let mut rays = [unused; LANES];
         let mut hits: [Option<Hit>; LANES] = [None; LANES];
+        let mut diffuse = DiffuseCameraLanes::default();
         while active != 0 {
             for_lanes(active, |k| {
                 rays[k] = Ray::new(walks[k].origin, walks[k].dir)
@@ -191,6 +197,7 @@ impl Bidirectional {
             scene.intersect_lanes(&rays, active, &mut hits);
             let mut going_on = 0u32;
             connections.clear();
+            diffuse.clear();
             for_lanes(active, |k| {
                 let at = CameraVertex {
                     scene,
@@ -198,21 +205,94 @@ impl Bidirectional {
                     merges,
                     pixel: pixels[k],
                 };
-                let mut wait = |ray: Option<Ray>, share: Share, _: &mut Rgb, _: &mut SampleSink| {
-                    connections.push((k, ray, share))
+                let walk = &mut walks[k];
+                let arrival =
+                    self.camera_arrive(at, walk, hits[k], &mut results[k], &mut no_records);
+                let Some((surface, wo, material)) = arrival else {
+                    return;
                 };
-                if self.camera_vertex::<MERGE>(
-                    at,
-                    &mut walks[k],
-                    &mut samplers[k],
-                    hits[k],
-                    &mut results[k],
-                    &mut no_records,
-                    &mut wait,
-                ) {
-                    going_on |= 1 << k;
+                let sampler = &mut samplers[k];
+                match &scene.materials[material as usize] {
+                    // BDPT's diffuse vertices are staged for `diffuse.shade`
+                    // (see `bdpt_diffuse.rs`), their connections made here.
+                    Material::Diffuse { albedo } if !MERGE => {
+                        let bsdf = scene.materials[material as usize].bsdf(&surface, wo);
+                        let numbers = sampler.vertex_numbers(true);
+                        let (u_select, u_point) =
+                            numbers.light.expect("diffuse vertices sample lights");
+                        let chosen = scene.light_selector.sample(u_select);
+                        match chosen.and_then(|(index, pick)| match &scene.lights[index] {
+                            Light::Area(light) => Some((light, pick)),
+                            _ => None,
+                        }) {
+                            Some((light, pick)) => {
+                                diffuse.stage_light(k, light, pick, u_point, connections.len());
+                                // Its place in the list, filled after the pass.
+                                let waiting = Share::light_sample(walk, Rgb::ZERO, 0.0);
+                                connections.push((k, None, waiting));
+                            }
+                            None => {
+                                let (l, weight, ray) = light_sample(
+                                    scene, &surface, &bsdf, wo, walk, u_select, u_point,
+                                );
+                                connections.push((k, ray, Share::light_sample(walk, l, weight)));
+                            }
+                        }
+                        let mut wait =
+                            |ray: Option<Ray>, share: Share, _: &mut Rgb, _: &mut SampleSink| {
+                                connections.push((k, ray, share))
+                            };
+                        self.connect_light_vertices::<MERGE>(
+                            at,
+                            walk,
+                            &surface,
+                            &bsdf,
+                            wo,
+                            &mut results[k],
+                            &mut no_records,
+                            &mut wait,
+                        );
+                        let albedo = albedo.at(&surface);
+                        diffuse.stage(
+                            k,
+                            &surface,
+                            wo,
+                            albedo,
+                            walk,
+                            numbers.direction,
+                            numbers.roulette,
+                        );
+                    }
+                    _ => {
+                        let mut wait =
+                            |ray: Option<Ray>, share: Share, _: &mut Rgb, _: &mut SampleSink| {
+                                connections.push((k, ray, share))
+                            };
+                        if self.camera_scatter::<MERGE>(
+                            at,
+                            walk,
+                            sampler,
+                            (surface, wo, material),
+                            &mut results[k],
+                            &mut no_records,
+                            &mut wait,
+                        ) {
+                            going_on |= 1 << k;
+                        }
+                    }
                 }
             });
+            if diffuse.staged() != 0 {
+                diffuse.shade();
+                for_lanes(diffuse.staged(), |k| {
+                    if let Some((slot, ray, share)) = diffuse.light_share(k, &walks[k]) {
+                        connections[slot] = (k, ray, share);
+                    }
+                    if diffuse.follow(k, &mut walks[k]) {
+                        going_on |= 1 << k;
+                    }
+                });
+            }
             scene.shadow_run(
                 connections,
                 |&(_, ray, _)| ray,

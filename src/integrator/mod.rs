@@ -11,6 +11,7 @@
 //! this one; `render/` never names one.
 
 mod bdpt;
+mod bdpt_diffuse;
 mod bdpt_lanes;
 mod connect;
 mod lanes;
@@ -18,6 +19,7 @@ mod light_path;
 mod lt;
 pub mod mis;
 mod pt;
+mod simd;
 mod sink;
 mod vcm;
 mod walk;

@@ -11,7 +11,6 @@
 //! bias.
 
 mod diffuse;
-mod simd;
 
 pub(super) use diffuse::DiffuseLanes;
 

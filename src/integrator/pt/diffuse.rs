@@ -20,15 +20,15 @@
 //! path tracer's instructions; docs/benchmarks.md, "The path tracer's
 //! diffuse vertices in SIMD lanes").
 
-use super::simd::{
-    cosine_hemisphere, get3, lane_mask, offset_origin, oriented_frame, power_heuristic, roulette,
-    set3, Lanes, Lanes3, V3,
-};
 use super::{Arrival, CameraPath, DirectLight, Vertex, ROULETTE_START};
 use crate::bvh::LANES;
 use crate::color::Rgb;
 use crate::geometry::Ray;
-use crate::light::{AreaLight, Light};
+use crate::integrator::simd::{
+    cosine_hemisphere, diffuse_eval, get3, lane_mask, load, load3, offset_origin, oriented_frame,
+    power_heuristic, roulette, set3, set_bits, store, store3, Lanes, Lanes3, StagedLights,
+};
+use crate::light::Light;
 use crate::material::Albedo;
 use crate::scene::Scene;
 use std::f32::consts::FRAC_1_PI;
@@ -52,16 +52,8 @@ pub(in crate::integrator) struct DiffuseLanes {
     roulette: Lanes,
     /// Lanes whose paths are long enough for roulette.
     roulette_on: u32,
-    /// Lanes with an area light's sample to evaluate, and its numbers.
-    lit: u32,
-    pick: Lanes,
-    light_point: [Lanes; 2],
-    light_vertices: [Lanes3; 3],
-    light_normal: Lanes3,
-    light_area: Lanes,
-    light_radiance: Lanes3,
-    light_magnitude: Lanes,
-    light_two_sided: u32,
+    /// The lanes' lights to sample.
+    lights: StagedLights,
     out: Shaded,
 }
 
@@ -91,8 +83,7 @@ impl DiffuseLanes {
     pub fn clear(&mut self) {
         self.staged = 0;
         self.roulette_on = 0;
-        self.lit = 0;
-        self.light_two_sided = 0;
+        self.lights.clear();
     }
 
     /// Shades every staged lane.
@@ -131,7 +122,7 @@ impl CameraPath {
                 let bsdf = material.bsdf(&arrival.surface, arrival.wo);
                 return Some(self.scatter(scene, arrival, &bsdf, numbers));
             };
-            lanes.stage_light(lane, light, pick, u_point);
+            lanes.lights.stage(lane, light, pick, u_point);
         } else {
             // No light to sample: the sample adds the throughput times zero.
             self.radiance += self.throughput * Rgb::ZERO;
@@ -167,7 +158,7 @@ impl CameraPath {
         let bit = 1u32 << lane;
         let out = &lanes.out;
         let mut direct = None;
-        if lanes.lit & bit != 0 {
+        if lanes.lights.lit & bit != 0 {
             let nothing = self.throughput * Rgb::ZERO;
             if out.direct_some & bit != 0 {
                 let shadow = (out.shadow_some & bit != 0).then(|| {
@@ -206,46 +197,25 @@ impl CameraPath {
 }
 
 impl DiffuseLanes {
-    #[inline(always)]
-    fn stage_light(&mut self, lane: usize, light: &AreaLight, pick: f32, u: (f32, f32)) {
-        self.lit |= 1 << lane;
-        self.pick[lane] = pick;
-        self.light_point[0][lane] = u.0;
-        self.light_point[1][lane] = u.1;
-        for (vertex, v) in self.light_vertices.iter_mut().zip(light.triangle.v) {
-            set3(vertex, lane, v);
-        }
-        set3(&mut self.light_normal, lane, light.normal);
-        self.light_area[lane] = light.area;
-        set3(&mut self.light_radiance, lane, light.radiance);
-        self.light_magnitude[lane] = light.magnitude;
-        if light.two_sided {
-            self.light_two_sided |= 1 << lane;
-        }
-    }
-
     /// The SIMD pass over lanes `base .. base + 8`.
     fn shade_half(&mut self, base: usize) {
-        let load = |a: &Lanes| f32x8::new(a[base..base + 8].try_into().expect("eight lanes"));
-        let load3 = |a: &Lanes3| V3 {
-            x: load(&a[0]),
-            y: load(&a[1]),
-            z: load(&a[2]),
-        };
         let mask = |bits: u32| lane_mask(bits >> base);
-        let position = load3(&self.position);
-        let normal = load3(&self.normal);
-        let wo = load3(&self.wo);
-        let magnitude = load(&self.magnitude);
-        let throughput = load3(&self.throughput);
-        let albedo = load3(&self.albedo);
+        let position = load3(&self.position, base);
+        let normal = load3(&self.normal, base);
+        let wo = load3(&self.wo, base);
+        let magnitude = load(&self.magnitude, base);
+        let throughput = load3(&self.throughput, base);
+        let albedo = load3(&self.albedo, base);
 
         // The BSDF (`Material::bsdf`): the normals turned to `wo`'s side,
         // and the shading frame around the shading normal.
-        let (_, ng, frame) = oriented_frame(normal, load3(&self.shading_normal), wo);
+        let (_, ng, frame) = oriented_frame(normal, load3(&self.shading_normal, base), wo);
 
         // The next direction (`Bsdf::sample`, diffuse).
-        let local = cosine_hemisphere(load(&self.direction[0]), load(&self.direction[1]));
+        let local = cosine_hemisphere(
+            load(&self.direction[0], base),
+            load(&self.direction[1], base),
+        );
         let pdf = local.z.max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI);
         let wi = frame.to_world(local);
         let reflected = local.z.simd_gt(f32x8::ZERO);
@@ -254,83 +224,38 @@ impl DiffuseLanes {
         // A diffuse bounce leaves eta² as it is (it multiplies by 1).
         let (next, dies) = roulette(
             throughput * albedo,
-            load(&self.eta_squared),
+            load(&self.eta_squared, base),
             mask(self.roulette_on),
-            load(&self.roulette),
+            load(&self.roulette, base),
         );
 
         let out = &mut self.out;
-        let sampled_bits = sampled.to_bitmask() << base;
-        let survives_bits = (!dies).to_bitmask() << base;
-        let keep = !(0xffu32 << base);
-        out.sampled = (out.sampled & keep) | sampled_bits;
-        out.survives = (out.survives & keep) | survives_bits;
-        let store = |v: f32x8, a: &mut Lanes| a[base..base + 8].copy_from_slice(&v.to_array());
-        let store3 = |v: V3, a: &mut Lanes3| {
-            store(v.x, &mut a[0]);
-            store(v.y, &mut a[1]);
-            store(v.z, &mut a[2]);
-        };
-        store3(next, &mut out.throughput);
-        store(pdf, &mut out.pdf);
-        store3(next_origin, &mut out.next_origin);
-        store3(wi, &mut out.next_dir);
+        set_bits(&mut out.sampled, sampled, base);
+        set_bits(&mut out.survives, !dies, base);
+        store3(next, &mut out.throughput, base);
+        store(pdf, &mut out.pdf, base);
+        store3(next_origin, &mut out.next_origin, base);
+        store3(wi, &mut out.next_dir, base);
 
-        if (self.lit >> base) & 0xff == 0 {
-            out.direct_some &= keep;
+        if (self.lights.lit >> base) & 0xff == 0 {
+            set_bits(&mut out.direct_some, f32x8::ZERO, base);
             return;
         }
-        // The light sample (`AreaLight::sample_incident`).
-        let (u, v) = (load(&self.light_point[0]), load(&self.light_point[1]));
-        let fold = (u + v).simd_gt(f32x8::ONE);
-        let b1 = fold.select(f32x8::ONE - u, u);
-        let b2 = fold.select(f32x8::ONE - v, v);
-        let [v0, v1, v2] = self.light_vertices.each_ref().map(load3);
-        let point = v0.scale(f32x8::ONE - b1 - b2) + v1.scale(b1) + v2.scale(b2);
-        let to_light = point - position;
-        let d2 = to_light.dot(to_light);
-        let distance = d2.sqrt();
-        let light_wi = to_light.div(distance);
-        let light_normal = load3(&self.light_normal);
-        let radiance = load3(&self.light_radiance);
-        let emits = mask(self.light_two_sided) | (-light_wi).dot(light_normal).simd_gt(f32x8::ZERO);
-        let cos_light = light_wi.dot(light_normal).abs();
-        let black_light = radiance.is_zero();
-        let light_pdf_area = d2 / (cos_light * load(&self.light_area));
-        let mut some = mask(self.lit)
-            & !d2.simd_le(f32x8::ZERO)
-            & !cos_light.simd_le(f32x8::ZERO)
-            & emits
-            & !black_light;
-        // The BSDF's value and density there (`Bsdf::eval`, `Bsdf::pdf`).
-        let light_reflected = light_wi.dot(ng).simd_gt(f32x8::ZERO);
-        let same_side = !(light_wi.dot(frame.n).simd_gt(f32x8::ZERO) ^ light_reflected);
-        let cos = light_wi.dot(frame.n);
-        let lobe = same_side & light_reflected;
-        let f = albedo.scale(f32x8::splat(FRAC_1_PI) * cos);
-        let f = V3::select(lobe & !cos.simd_le(f32x8::ZERO), f, V3::zero());
-        some &= !f.is_zero();
-        let bsdf_pdf = lobe.select(cos.max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI), f32x8::ZERO);
-        // The shadow ray (`connect::shadow_ray`).
-        let origin = offset_origin(position, normal, light_wi, magnitude);
-        let target = offset_origin(point, light_normal, -light_wi, load(&self.light_magnitude));
-        let to_target = target - origin;
-        let length = to_target.dot(to_target).sqrt();
-        let unbounded = distance.is_inf();
-        let has_ray = unbounded | !(length.is_nan() | length.simd_le(f32x8::ZERO));
-        let shadow_dir = V3::select(unbounded, light_wi, to_target.div(length));
-        let shadow_tmax = unbounded.select(f32x8::splat(f32::INFINITY), length);
-        // The weight against BSDF sampling, and the estimate.
-        let light_pdf = load(&self.pick) * light_pdf_area;
+        // The light sample, the BSDF's value and density there, the weight
+        // against BSDF sampling, and the estimate (`direct_light`).
+        let light = self.lights.sample(base, position, normal, magnitude);
+        let (f, bsdf_pdf) = diffuse_eval(albedo, frame.n, ng, light.wi);
+        let some = light.some & !f.is_zero();
+        let light_pdf = light.pick * light.pdf;
         let weight = power_heuristic(light_pdf, bsdf_pdf);
-        let value = (f * radiance).scale(weight / light_pdf);
+        let value = (f * light.radiance).scale(weight / light_pdf);
         let direct = throughput * value;
 
-        out.direct_some = (out.direct_some & keep) | (some.to_bitmask() << base);
-        out.shadow_some = (out.shadow_some & keep) | ((some & has_ray).to_bitmask() << base);
-        store3(direct, &mut out.direct);
-        store3(origin, &mut out.shadow_origin);
-        store3(shadow_dir, &mut out.shadow_dir);
-        store(shadow_tmax, &mut out.shadow_tmax);
+        set_bits(&mut out.direct_some, some, base);
+        set_bits(&mut out.shadow_some, some & light.has_ray, base);
+        store3(direct, &mut out.direct, base);
+        store3(light.ray_origin, &mut out.shadow_origin, base);
+        store3(light.ray_dir, &mut out.shadow_dir, base);
+        store(light.ray_tmax, &mut out.shadow_tmax, base);
     }
 }

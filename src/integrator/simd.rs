@@ -6,8 +6,9 @@
 //! The unit tests compare each against its scalar original.
 
 use crate::bvh::LANES;
+use crate::light::AreaLight;
 use glam::Vec3;
-use std::f32::consts::PI;
+use std::f32::consts::{FRAC_1_PI, PI};
 use wide::f32x8;
 
 /// One number per lane.
@@ -220,6 +221,174 @@ pub(super) fn roulette(throughput: V3, eta_squared: f32x8, on: f32x8, u: f32x8) 
     let survive = (throughput.max_element() * eta_squared).min(f32x8::ONE);
     let dies = on & u.simd_ge(survive);
     (V3::select(on, throughput.div(survive), throughput), dies)
+}
+
+/// Emissive triangles chosen by light sampling, staged lane by lane.
+#[derive(Default)]
+pub(super) struct StagedLights {
+    /// Lanes with a light staged.
+    pub lit: u32,
+    pick: Lanes,
+    point: [Lanes; 2],
+    vertices: [Lanes3; 3],
+    normal: Lanes3,
+    area: Lanes,
+    radiance: Lanes3,
+    magnitude: Lanes,
+    two_sided: u32,
+}
+
+/// A light sample in eight lanes (`AreaLight::sample_incident`), with its
+/// shadow ray (`connect::shadow_ray`).
+pub(super) struct LightSample {
+    /// Lanes whose sample can add light: a light was staged, the point is
+    /// apart from the receiver, and the light emits towards it.
+    pub some: f32x8,
+    pub wi: V3,
+    /// Solid-angle density of the point, seen from the receiver.
+    pub pdf: f32x8,
+    /// The light's selection probability.
+    pub pick: f32x8,
+    pub radiance: V3,
+    pub cos_light: f32x8,
+    pub light_area: f32x8,
+    pub two_sided: f32x8,
+    /// Lanes with a shadow ray (the others: nothing can block the sample).
+    pub has_ray: f32x8,
+    pub ray_origin: V3,
+    pub ray_dir: V3,
+    pub ray_tmax: f32x8,
+}
+
+impl StagedLights {
+    pub fn clear(&mut self) {
+        self.lit = 0;
+        self.two_sided = 0;
+    }
+
+    /// Stages `light`, chosen with probability `pick`, and the numbers `u`
+    /// of its point, in `lane`.
+    #[inline(always)]
+    pub fn stage(&mut self, lane: usize, light: &AreaLight, pick: f32, u: (f32, f32)) {
+        self.lit |= 1 << lane;
+        self.pick[lane] = pick;
+        self.point[0][lane] = u.0;
+        self.point[1][lane] = u.1;
+        for (vertex, v) in self.vertices.iter_mut().zip(light.triangle.v) {
+            set3(vertex, lane, v);
+        }
+        set3(&mut self.normal, lane, light.normal);
+        self.area[lane] = light.area;
+        set3(&mut self.radiance, lane, light.radiance);
+        self.magnitude[lane] = light.magnitude;
+        if light.two_sided {
+            self.two_sided |= 1 << lane;
+        }
+    }
+
+    /// The samples of lanes `base .. base + 8` from receivers at
+    /// `position` (with their geometric normals and magnitudes, for the
+    /// shadow rays).
+    #[inline(always)]
+    pub fn sample(&self, base: usize, position: V3, normal: V3, magnitude: f32x8) -> LightSample {
+        let load = |a: &Lanes| load(a, base);
+        let load3 = |a: &Lanes3| load3(a, base);
+        let (u, v) = (load(&self.point[0]), load(&self.point[1]));
+        // `warp::uniform_triangle` and `Triangle::point`.
+        let fold = (u + v).simd_gt(f32x8::ONE);
+        let b1 = fold.select(f32x8::ONE - u, u);
+        let b2 = fold.select(f32x8::ONE - v, v);
+        let [v0, v1, v2] = self.vertices.each_ref().map(load3);
+        let point = v0.scale(f32x8::ONE - b1 - b2) + v1.scale(b1) + v2.scale(b2);
+        let to_light = point - position;
+        let d2 = to_light.dot(to_light);
+        let distance = d2.sqrt();
+        let wi = to_light.div(distance);
+        let light_normal = load3(&self.normal);
+        let radiance = load3(&self.radiance);
+        let two_sided = lane_mask(self.two_sided >> base);
+        let emits = two_sided | (-wi).dot(light_normal).simd_gt(f32x8::ZERO);
+        let cos_light = wi.dot(light_normal).abs();
+        let light_area = load(&self.area);
+        let pdf = d2 / (cos_light * light_area);
+        let some = lane_mask(self.lit >> base)
+            & !d2.simd_le(f32x8::ZERO)
+            & !cos_light.simd_le(f32x8::ZERO)
+            & emits
+            & !radiance.is_zero();
+        // The shadow ray, each end moved off its surface.
+        let origin = offset_origin(position, normal, wi, magnitude);
+        let target = offset_origin(point, light_normal, -wi, load(&self.magnitude));
+        let to_target = target - origin;
+        let length = to_target.dot(to_target).sqrt();
+        let unbounded = distance.is_inf();
+        LightSample {
+            some,
+            wi,
+            pdf,
+            pick: load(&self.pick),
+            radiance,
+            cos_light,
+            light_area,
+            two_sided,
+            has_ray: unbounded | !(length.is_nan() | length.simd_le(f32x8::ZERO)),
+            ray_origin: origin,
+            ray_dir: V3::select(unbounded, wi, to_target.div(length)),
+            ray_tmax: unbounded.select(f32x8::splat(f32::INFINITY), length),
+        }
+    }
+}
+
+/// A Lambertian BSDF of reflectance `albedo` towards `wi`, lane by lane
+/// (`Bsdf::eval` and `Bsdf::pdf`): its value f cos, and the density of
+/// sampling `wi`; `n` is the shading normal and `ng` the geometric one,
+/// both on `wo`'s side.
+#[inline(always)]
+pub(super) fn diffuse_eval(albedo: V3, n: V3, ng: V3, wi: V3) -> (V3, f32x8) {
+    let reflected = wi.dot(ng).simd_gt(f32x8::ZERO);
+    let same_side = !(wi.dot(n).simd_gt(f32x8::ZERO) ^ reflected);
+    let cos = wi.dot(n);
+    let lobe = same_side & reflected;
+    let f = albedo.scale(f32x8::splat(FRAC_1_PI) * cos);
+    let f = V3::select(lobe & !cos.simd_le(f32x8::ZERO), f, V3::zero());
+    let pdf = lobe.select(cos.max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI), f32x8::ZERO);
+    (f, pdf)
+}
+
+/// Lanes `base .. base + 8` of `a`.
+#[inline(always)]
+pub(super) fn load(a: &Lanes, base: usize) -> f32x8 {
+    f32x8::new(a[base..base + 8].try_into().expect("eight lanes"))
+}
+
+/// Lanes `base .. base + 8` of the vectors `a`.
+#[inline(always)]
+pub(super) fn load3(a: &Lanes3, base: usize) -> V3 {
+    V3 {
+        x: load(&a[0], base),
+        y: load(&a[1], base),
+        z: load(&a[2], base),
+    }
+}
+
+/// Stores `v` in lanes `base .. base + 8` of `a`.
+#[inline(always)]
+pub(super) fn store(v: f32x8, a: &mut Lanes, base: usize) {
+    a[base..base + 8].copy_from_slice(&v.to_array());
+}
+
+/// Stores `v` in lanes `base .. base + 8` of the vectors `a`.
+#[inline(always)]
+pub(super) fn store3(v: V3, a: &mut Lanes3, base: usize) {
+    store(v.x, &mut a[0], base);
+    store(v.y, &mut a[1], base);
+    store(v.z, &mut a[2], base);
+}
+
+/// Sets bits `base .. base + 8` of `bits` to `mask`'s lanes.
+#[inline(always)]
+pub(super) fn set_bits(bits: &mut u32, mask: f32x8, base: usize) {
+    *bits = (*bits & !(0xff << base)) | (mask.to_bitmask() << base);
 }
 
 /// `warp::cosine_hemisphere`, lane by lane.

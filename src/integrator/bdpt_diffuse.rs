@@ -1,0 +1,289 @@
+//! BDPT's camera vertices on Lambertian surfaces, shaded eight lanes at a
+//! time, as the path tracer's are (`pt/diffuse.rs`): each lane stages its
+//! surface, walk and numbers, and the emissive triangle its light sample
+//! chose; one SIMD pass per half of the lanes then samples the next
+//! direction, evaluates the light sample (s = 1) with its weight against
+//! the other strategies, and follows the walk: its MIS quantities, its
+//! throughput and Russian roulette. The connections to the light
+//! vertices stay scalar, between staging and the pass. Every operation is
+//! the scalar code's (`Bidirectional::camera_vertex`, `light_sample`,
+//! `Walk::follow`) in its order, so each sample stays bit for bit what it
+//! is alone (`tests/it/determinism.rs`).
+
+use super::bdpt::Share;
+use super::simd::{
+    cosine_hemisphere, diffuse_eval, get3, lane_mask, load, load3, offset_origin, oriented_frame,
+    roulette, set3, set_bits, store, store3, Lanes, Lanes3, StagedLights,
+};
+use super::walk::Walk;
+use super::ROULETTE_START;
+use crate::bvh::LANES;
+use crate::color::Rgb;
+use crate::geometry::{Ray, SurfacePoint};
+use crate::light::AreaLight;
+use glam::Vec3;
+use std::f32::consts::{FRAC_1_PI, PI};
+use wide::f32x8;
+
+/// The staged inputs of a step's diffuse camera vertices, and their results.
+#[derive(Default)]
+pub(super) struct DiffuseCameraLanes {
+    /// Lanes staged this step.
+    staged: u32,
+    position: Lanes3,
+    normal: Lanes3,
+    shading_normal: Lanes3,
+    magnitude: Lanes,
+    wo: Lanes3,
+    albedo: Lanes3,
+    throughput: Lanes3,
+    roulette_scale: Lanes,
+    d_vcm: Lanes,
+    d_vc: Lanes,
+    d_vm: Lanes,
+    vm: Lanes,
+    vc: Lanes,
+    direction: [Lanes; 2],
+    roulette: Lanes,
+    roulette_on: u32,
+    lights: StagedLights,
+    /// Each lit lane's place in the step's list of shares, where its
+    /// s = 1 share waits for the pass.
+    slots: [usize; LANES],
+    out: Followed,
+}
+
+/// What the SIMD pass hands back, per lane.
+#[derive(Default)]
+struct Followed {
+    /// s = 1: the lanes whose light sample adds something, and of those
+    /// the ones with a shadow ray.
+    light_some: u32,
+    light_ray: u32,
+    light_value: Lanes3,
+    light_weight: Lanes,
+    ray_origin: Lanes3,
+    ray_dir: Lanes3,
+    ray_tmax: Lanes,
+    /// The walk: lanes with a next direction, and of those the ones that
+    /// roulette spares.
+    sampled: u32,
+    survives: u32,
+    throughput: Lanes3,
+    origin: Lanes3,
+    dir: Lanes3,
+    d_vcm: Lanes,
+    d_vc: Lanes,
+    d_vm: Lanes,
+}
+
+impl DiffuseCameraLanes {
+    /// Forgets the previous step's lanes.
+    pub fn clear(&mut self) {
+        self.staged = 0;
+        self.roulette_on = 0;
+        self.lights.clear();
+    }
+
+    /// Lanes staged this step.
+    pub fn staged(&self) -> u32 {
+        self.staged
+    }
+
+    /// Stages lane `lane`'s vertex at `surface` (reflectance `albedo`, seen
+    /// along `wo`) on `walk`, with its numbers for the direction and for
+    /// roulette.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub fn stage(
+        &mut self,
+        lane: usize,
+        surface: &SurfacePoint,
+        wo: Vec3,
+        albedo: Rgb,
+        walk: &Walk,
+        direction: (f32, f32),
+        roulette: f32,
+    ) {
+        let bit = 1u32 << lane;
+        self.staged |= bit;
+        set3(&mut self.position, lane, surface.position);
+        set3(&mut self.normal, lane, surface.geometric_normal);
+        set3(&mut self.shading_normal, lane, surface.shading_normal);
+        self.magnitude[lane] = surface.magnitude;
+        set3(&mut self.wo, lane, wo);
+        set3(&mut self.albedo, lane, albedo);
+        set3(&mut self.throughput, lane, walk.throughput);
+        self.roulette_scale[lane] = walk.roulette_scale;
+        self.d_vcm[lane] = walk.d_vcm;
+        self.d_vc[lane] = walk.d_vc;
+        self.d_vm[lane] = walk.d_vm;
+        self.vm[lane] = walk.merging.vm;
+        self.vc[lane] = walk.merging.vc;
+        self.direction[0][lane] = direction.0;
+        self.direction[1][lane] = direction.1;
+        self.roulette[lane] = roulette;
+        if walk.length >= ROULETTE_START {
+            self.roulette_on |= bit;
+        }
+    }
+
+    /// Stages lane `lane`'s light sample: `light`, chosen with probability
+    /// `pick`, and the numbers `u` of its point; its share is to go to
+    /// place `slot` of the step's list.
+    #[inline(always)]
+    pub fn stage_light(
+        &mut self,
+        lane: usize,
+        light: &AreaLight,
+        pick: f32,
+        u: (f32, f32),
+        slot: usize,
+    ) {
+        self.lights.stage(lane, light, pick, u);
+        self.slots[lane] = slot;
+    }
+
+    /// Shades every staged lane.
+    pub fn shade(&mut self) {
+        for half in 0..LANES / 8 {
+            if (self.staged >> (8 * half)) & 0xff != 0 {
+                self.shade_half(8 * half);
+            }
+        }
+    }
+
+    /// Lane `lane`'s s = 1 share and its shadow ray, where it staged a
+    /// light, with the place in the list it goes to.
+    #[inline(always)]
+    pub fn light_share(&self, lane: usize, walk: &Walk) -> Option<(usize, Option<Ray>, Share)> {
+        let bit = 1u32 << lane;
+        if self.lights.lit & bit == 0 {
+            return None;
+        }
+        let out = &self.out;
+        // As `light_sample` returns it when it adds nothing.
+        let (l, weight, ray) = if out.light_some & bit == 0 {
+            (Rgb::ZERO, 0.0, None)
+        } else {
+            let ray = (out.light_ray & bit != 0).then(|| {
+                Ray::segment(
+                    get3(&out.ray_origin, lane),
+                    get3(&out.ray_dir, lane),
+                    out.ray_tmax[lane],
+                )
+            });
+            (get3(&out.light_value, lane), out.light_weight[lane], ray)
+        };
+        Some((self.slots[lane], ray, Share::light_sample(walk, l, weight)))
+    }
+
+    /// Follows lane `lane`'s walk as `Walk::follow` would, and counts the
+    /// vertex as `camera_vertex` does; returns whether the walk goes on.
+    #[inline(always)]
+    pub fn follow(&self, lane: usize, walk: &mut Walk) -> bool {
+        let bit = 1u32 << lane;
+        let out = &self.out;
+        if out.sampled & bit == 0 {
+            return false;
+        }
+        walk.d_vcm = out.d_vcm[lane];
+        walk.d_vc = out.d_vc[lane];
+        walk.d_vm = out.d_vm[lane];
+        walk.throughput = get3(&out.throughput, lane);
+        // A diffuse bounce leaves the roulette scale as it is (it
+        // multiplies by eta² = 1).
+        walk.origin = get3(&out.origin, lane);
+        walk.dir = get3(&out.dir, lane);
+        if out.survives & bit == 0 {
+            return false;
+        }
+        walk.length += 1;
+        true
+    }
+
+    /// The SIMD pass over lanes `base .. base + 8`.
+    fn shade_half(&mut self, base: usize) {
+        let (one, zero) = (f32x8::ONE, f32x8::ZERO);
+        let mis = |x: f32x8| x * x;
+        let position = load3(&self.position, base);
+        let normal = load3(&self.normal, base);
+        let wo = load3(&self.wo, base);
+        let magnitude = load(&self.magnitude, base);
+        let throughput = load3(&self.throughput, base);
+        let albedo = load3(&self.albedo, base);
+        let (d_vcm, d_vc, d_vm) = (
+            load(&self.d_vcm, base),
+            load(&self.d_vc, base),
+            load(&self.d_vm, base),
+        );
+        let vm = load(&self.vm, base);
+        let (_, ng, frame) = oriented_frame(normal, load3(&self.shading_normal, base), wo);
+        // The density of sampling `wo` back from any reflected direction
+        // (`Bsdf::pdfs`' reverse density, diffuse).
+        let reverse_pdf = wo.dot(frame.n).max(zero) * f32x8::splat(FRAC_1_PI);
+
+        // The next direction (`Bsdf::sample`, diffuse).
+        let local = cosine_hemisphere(
+            load(&self.direction[0], base),
+            load(&self.direction[1], base),
+        );
+        let pdf = local.z.max(zero) * f32x8::splat(FRAC_1_PI);
+        let wi = frame.to_world(local);
+        let reflected = local.z.simd_gt(zero);
+        let sampled = !pdf.simd_le(zero) & !(wi.dot(ng).simd_gt(zero) ^ reflected);
+
+        if (self.lights.lit >> base) & 0xff != 0 {
+            // s = 1 (`light_sample`).
+            let light = self.lights.sample(base, position, normal, magnitude);
+            let (f, bsdf_pdf) = diffuse_eval(albedo, frame.n, ng, light.wi);
+            let sides = light.two_sided.select(f32x8::splat(0.5), one);
+            let emission = sides * light.cos_light.abs() / f32x8::splat(PI) / light.light_area;
+            let direct = light.pdf;
+            let cos_receiver = light.wi.dot(normal).abs();
+            let w_light = mis(bsdf_pdf / (light.pick * direct));
+            let w_camera = mis(emission * cos_receiver / (direct * light.cos_light))
+                * (vm + d_vcm + d_vc * mis(reverse_pdf));
+            let weight = one / (w_light + one + w_camera);
+            let contribution = (f * light.radiance).div(light.pick * light.pdf);
+            let some = light.some & !f.is_zero() & !contribution.is_zero();
+            let out = &mut self.out;
+            set_bits(&mut out.light_some, some, base);
+            set_bits(&mut out.light_ray, light.has_ray, base);
+            store3(contribution, &mut out.light_value, base);
+            store(weight, &mut out.light_weight, base);
+            store3(light.ray_origin, &mut out.ray_origin, base);
+            store3(light.ray_dir, &mut out.ray_dir, base);
+            store(light.ray_tmax, &mut out.ray_tmax, base);
+        }
+
+        // `Walk::follow`: the MIS quantities (`update_weights`, report
+        // eqs. 34-36), the throughput, the next ray and roulette.
+        let cos_out = wi.dot(normal).abs();
+        // `Bsdf::pdfs` gives the reverse density only where the direction
+        // passes its own side test, in world space.
+        let wi_reflected = wi.dot(ng).simd_gt(zero);
+        let wi_side = wi_reflected & !(wi.dot(frame.n).simd_gt(zero) ^ wi_reflected);
+        let reverse = mis(wi_side.select(reverse_pdf, zero));
+        let scale = mis(cos_out / pdf);
+        let next_d_vc = scale * (d_vc * reverse + d_vcm + vm);
+        let next_d_vm = scale * (d_vm * reverse + d_vcm * load(&self.vc, base) + one);
+        let next_d_vcm = mis(one / pdf);
+        let origin = offset_origin(position, normal, wi, magnitude);
+        let (next, dies) = roulette(
+            throughput * albedo,
+            load(&self.roulette_scale, base),
+            lane_mask(self.roulette_on >> base),
+            load(&self.roulette, base),
+        );
+        let out = &mut self.out;
+        set_bits(&mut out.sampled, sampled, base);
+        set_bits(&mut out.survives, !dies, base);
+        store3(next, &mut out.throughput, base);
+        store3(origin, &mut out.origin, base);
+        store3(wi, &mut out.dir, base);
+        store(next_d_vcm, &mut out.d_vcm, base);
+        store(next_d_vc, &mut out.d_vc, base);
+        store(next_d_vm, &mut out.d_vm, base);
+    }
+}
