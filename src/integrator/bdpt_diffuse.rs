@@ -12,8 +12,7 @@
 
 use super::bdpt::Share;
 use super::simd::{
-    cosine_hemisphere, diffuse_eval, get3, lane_mask, load, load3, offset_origin, oriented_frame,
-    roulette, set3, set_bits, store, store3, Lanes, Lanes3, StagedLights,
+    diffuse_eval, get3, load, set_bits, store, store3, Continued, Lanes, Lanes3, StagedVertices,
 };
 use super::walk::Walk;
 use super::ROULETTE_START;
@@ -28,25 +27,13 @@ use wide::f32x8;
 /// The staged inputs of a step's diffuse camera vertices, and their results.
 #[derive(Default)]
 pub(super) struct DiffuseCameraLanes {
-    /// Lanes staged this step.
-    staged: u32,
-    position: Lanes3,
-    normal: Lanes3,
-    shading_normal: Lanes3,
-    magnitude: Lanes,
-    wo: Lanes3,
-    albedo: Lanes3,
-    throughput: Lanes3,
+    vertices: StagedVertices,
     roulette_scale: Lanes,
     d_vcm: Lanes,
     d_vc: Lanes,
     d_vm: Lanes,
     vm: Lanes,
     vc: Lanes,
-    direction: [Lanes; 2],
-    roulette: Lanes,
-    roulette_on: u32,
-    lights: StagedLights,
     /// Each lit lane's place in the step's list of shares, where its
     /// s = 1 share waits for the pass.
     slots: [usize; LANES],
@@ -65,13 +52,8 @@ struct Followed {
     ray_origin: Lanes3,
     ray_dir: Lanes3,
     ray_tmax: Lanes,
-    /// The walk: lanes with a next direction, and of those the ones that
-    /// roulette spares.
-    sampled: u32,
-    survives: u32,
-    throughput: Lanes3,
-    origin: Lanes3,
-    dir: Lanes3,
+    /// The walks' next throughputs and rays, and which go on.
+    next: Continued,
     d_vcm: Lanes,
     d_vc: Lanes,
     d_vm: Lanes,
@@ -80,14 +62,12 @@ struct Followed {
 impl DiffuseCameraLanes {
     /// Forgets the previous step's lanes.
     pub fn clear(&mut self) {
-        self.staged = 0;
-        self.roulette_on = 0;
-        self.lights.clear();
+        self.vertices.clear();
     }
 
     /// Lanes staged this step.
     pub fn staged(&self) -> u32 {
-        self.staged
+        self.vertices.staged
     }
 
     /// Stages lane `lane`'s vertex at `surface` (reflectance `albedo`, seen
@@ -105,27 +85,23 @@ impl DiffuseCameraLanes {
         direction: (f32, f32),
         roulette: f32,
     ) {
-        let bit = 1u32 << lane;
-        self.staged |= bit;
-        set3(&mut self.position, lane, surface.position);
-        set3(&mut self.normal, lane, surface.geometric_normal);
-        set3(&mut self.shading_normal, lane, surface.shading_normal);
-        self.magnitude[lane] = surface.magnitude;
-        set3(&mut self.wo, lane, wo);
-        set3(&mut self.albedo, lane, albedo);
-        set3(&mut self.throughput, lane, walk.throughput);
+        let roulette_on = walk.length >= ROULETTE_START;
+        self.vertices.stage(
+            lane,
+            surface,
+            wo,
+            albedo,
+            walk.throughput,
+            direction,
+            roulette,
+            roulette_on,
+        );
         self.roulette_scale[lane] = walk.roulette_scale;
         self.d_vcm[lane] = walk.d_vcm;
         self.d_vc[lane] = walk.d_vc;
         self.d_vm[lane] = walk.d_vm;
         self.vm[lane] = walk.merging.vm;
         self.vc[lane] = walk.merging.vc;
-        self.direction[0][lane] = direction.0;
-        self.direction[1][lane] = direction.1;
-        self.roulette[lane] = roulette;
-        if walk.length >= ROULETTE_START {
-            self.roulette_on |= bit;
-        }
     }
 
     /// Stages lane `lane`'s light sample: `light`, chosen with probability
@@ -140,16 +116,14 @@ impl DiffuseCameraLanes {
         u: (f32, f32),
         slot: usize,
     ) {
-        self.lights.stage(lane, light, pick, u);
+        self.vertices.lights.stage(lane, light, pick, u);
         self.slots[lane] = slot;
     }
 
     /// Shades every staged lane.
     pub fn shade(&mut self) {
-        for half in 0..LANES / 8 {
-            if (self.staged >> (8 * half)) & 0xff != 0 {
-                self.shade_half(8 * half);
-            }
+        for base in self.vertices.halves() {
+            self.shade_half(base);
         }
     }
 
@@ -158,7 +132,7 @@ impl DiffuseCameraLanes {
     #[inline(always)]
     pub fn light_share(&self, lane: usize, walk: &Walk) -> Option<(usize, Option<Ray>, Share)> {
         let bit = 1u32 << lane;
-        if self.lights.lit & bit == 0 {
+        if self.vertices.lights.lit & bit == 0 {
             return None;
         }
         let out = &self.out;
@@ -184,18 +158,19 @@ impl DiffuseCameraLanes {
     pub fn follow(&self, lane: usize, walk: &mut Walk) -> bool {
         let bit = 1u32 << lane;
         let out = &self.out;
-        if out.sampled & bit == 0 {
+        if out.next.sampled & bit == 0 {
             return false;
         }
         walk.d_vcm = out.d_vcm[lane];
         walk.d_vc = out.d_vc[lane];
         walk.d_vm = out.d_vm[lane];
-        walk.throughput = get3(&out.throughput, lane);
+        let (throughput, origin, dir) = out.next.get(lane);
+        walk.throughput = throughput;
         // A diffuse bounce leaves the roulette scale as it is (it
         // multiplies by eta² = 1).
-        walk.origin = get3(&out.origin, lane);
-        walk.dir = get3(&out.dir, lane);
-        if out.survives & bit == 0 {
+        walk.origin = origin;
+        walk.dir = dir;
+        if out.next.survives & bit == 0 {
             return false;
         }
         walk.length += 1;
@@ -206,41 +181,26 @@ impl DiffuseCameraLanes {
     fn shade_half(&mut self, base: usize) {
         let (one, zero) = (f32x8::ONE, f32x8::ZERO);
         let mis = |x: f32x8| x * x;
-        let position = load3(&self.position, base);
-        let normal = load3(&self.normal, base);
-        let wo = load3(&self.wo, base);
-        let magnitude = load(&self.magnitude, base);
-        let throughput = load3(&self.throughput, base);
-        let albedo = load3(&self.albedo, base);
+        let v = self.vertices.vertices(base);
         let (d_vcm, d_vc, d_vm) = (
             load(&self.d_vcm, base),
             load(&self.d_vc, base),
             load(&self.d_vm, base),
         );
         let vm = load(&self.vm, base);
-        let (_, ng, frame) = oriented_frame(normal, load3(&self.shading_normal, base), wo);
-        // The density of sampling `wo` back from any reflected direction
+        // The density of sampling `wo` back from a reflected direction
         // (`Bsdf::pdfs`' reverse density, diffuse).
-        let reverse_pdf = wo.dot(frame.n).max(zero) * f32x8::splat(FRAC_1_PI);
+        let reverse_pdf = v.wo.dot(v.frame.n).max(zero) * f32x8::splat(FRAC_1_PI);
 
-        // The next direction (`Bsdf::sample`, diffuse).
-        let local = cosine_hemisphere(
-            load(&self.direction[0], base),
-            load(&self.direction[1], base),
-        );
-        let pdf = local.z.max(zero) * f32x8::splat(FRAC_1_PI);
-        let wi = frame.to_world(local);
-        let reflected = local.z.simd_gt(zero);
-        let sampled = !pdf.simd_le(zero) & !(wi.dot(ng).simd_gt(zero) ^ reflected);
-
-        if (self.lights.lit >> base) & 0xff != 0 {
+        let lights = &self.vertices.lights;
+        if (lights.lit >> base) & 0xff != 0 {
             // s = 1 (`light_sample`).
-            let light = self.lights.sample(base, position, normal, magnitude);
-            let (f, bsdf_pdf) = diffuse_eval(albedo, frame.n, ng, light.wi);
+            let light = lights.sample(base, v.position, v.normal, v.magnitude);
+            let (f, bsdf_pdf) = diffuse_eval(v.albedo, v.frame.n, v.ng, light.wi);
             let sides = light.two_sided.select(f32x8::splat(0.5), one);
             let emission = sides * light.cos_light.abs() / f32x8::splat(PI) / light.light_area;
             let direct = light.pdf;
-            let cos_receiver = light.wi.dot(normal).abs();
+            let cos_receiver = light.wi.dot(v.normal).abs();
             let w_light = mis(bsdf_pdf / (light.pick * direct));
             let w_camera = mis(emission * cos_receiver / (direct * light.cos_light))
                 * (vm + d_vcm + d_vc * mis(reverse_pdf));
@@ -259,29 +219,18 @@ impl DiffuseCameraLanes {
 
         // `Walk::follow`: the MIS quantities (`update_weights`, report
         // eqs. 34-36), the throughput, the next ray and roulette.
-        let cos_out = wi.dot(normal).abs();
+        let cos_out = v.wi.dot(v.normal).abs();
         // `Bsdf::pdfs` gives the reverse density only where the direction
         // passes its own side test, in world space.
-        let wi_reflected = wi.dot(ng).simd_gt(zero);
-        let wi_side = wi_reflected & !(wi.dot(frame.n).simd_gt(zero) ^ wi_reflected);
+        let wi_reflected = v.wi.dot(v.ng).simd_gt(zero);
+        let wi_side = wi_reflected & !(v.wi.dot(v.frame.n).simd_gt(zero) ^ wi_reflected);
         let reverse = mis(wi_side.select(reverse_pdf, zero));
-        let scale = mis(cos_out / pdf);
+        let scale = mis(cos_out / v.pdf);
         let next_d_vc = scale * (d_vc * reverse + d_vcm + vm);
         let next_d_vm = scale * (d_vm * reverse + d_vcm * load(&self.vc, base) + one);
-        let next_d_vcm = mis(one / pdf);
-        let origin = offset_origin(position, normal, wi, magnitude);
-        let (next, dies) = roulette(
-            throughput * albedo,
-            load(&self.roulette_scale, base),
-            lane_mask(self.roulette_on >> base),
-            load(&self.roulette, base),
-        );
+        let next_d_vcm = mis(one / v.pdf);
         let out = &mut self.out;
-        set_bits(&mut out.sampled, sampled, base);
-        set_bits(&mut out.survives, !dies, base);
-        store3(next, &mut out.throughput, base);
-        store3(origin, &mut out.origin, base);
-        store3(wi, &mut out.dir, base);
+        out.next.store(&v, load(&self.roulette_scale, base), base);
         store(next_d_vcm, &mut out.d_vcm, base);
         store(next_d_vc, &mut out.d_vc, base);
         store(next_d_vm, &mut out.d_vm, base);

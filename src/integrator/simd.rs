@@ -6,6 +6,7 @@
 //! The unit tests compare each against its scalar original.
 
 use crate::bvh::LANES;
+use crate::geometry::SurfacePoint;
 use crate::light::AreaLight;
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -221,6 +222,179 @@ pub(super) fn roulette(throughput: V3, eta_squared: f32x8, on: f32x8, u: f32x8) 
     let survive = (throughput.max_element() * eta_squared).min(f32x8::ONE);
     let dies = on & u.simd_ge(survive);
     (V3::select(on, throughput.div(survive), throughput), dies)
+}
+
+/// Vertices on Lambertian surfaces, staged lane by lane: what the path
+/// tracer's and BDPT's passes both read, and the lights their light
+/// samples chose.
+#[derive(Default)]
+pub(super) struct StagedVertices {
+    /// Lanes staged this step.
+    pub staged: u32,
+    position: Lanes3,
+    /// The geometric normal as the surface gives it (not yet facing `wo`).
+    normal: Lanes3,
+    shading_normal: Lanes3,
+    magnitude: Lanes,
+    wo: Lanes3,
+    albedo: Lanes3,
+    throughput: Lanes3,
+    direction: [Lanes; 2],
+    roulette: Lanes,
+    /// Lanes whose walks are long enough for roulette.
+    roulette_on: u32,
+    pub lights: StagedLights,
+}
+
+/// Lanes `base .. base + 8` of the staged vertices, with the BSDF's
+/// orientation and its sample (`Material::bsdf`, `Bsdf::sample` for a
+/// diffuse surface) and the next ray's origin.
+pub(super) struct DiffuseVertices {
+    pub position: V3,
+    /// The geometric normal as the surface gives it.
+    pub normal: V3,
+    pub magnitude: f32x8,
+    pub wo: V3,
+    pub albedo: V3,
+    pub throughput: V3,
+    /// The geometric normal on `wo`'s side, and the shading frame.
+    pub ng: V3,
+    pub frame: Frame,
+    /// The sampled direction, its density, and the lanes where sampling
+    /// gave one.
+    pub wi: V3,
+    pub pdf: f32x8,
+    pub sampled: f32x8,
+    pub next_origin: V3,
+    /// The roulette numbers, and the lanes that play it.
+    pub roulette: f32x8,
+    pub roulette_on: f32x8,
+}
+
+impl StagedVertices {
+    pub fn clear(&mut self) {
+        self.staged = 0;
+        self.roulette_on = 0;
+        self.lights.clear();
+    }
+
+    /// Stages `lane`'s vertex at `surface`, seen along `wo`, of
+    /// reflectance `albedo`, on a walk of `throughput`, with its numbers
+    /// for the direction and roulette (`roulette_on`: whether it plays).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub fn stage(
+        &mut self,
+        lane: usize,
+        surface: &SurfacePoint,
+        wo: Vec3,
+        albedo: Vec3,
+        throughput: Vec3,
+        direction: (f32, f32),
+        roulette: f32,
+        roulette_on: bool,
+    ) {
+        self.staged |= 1 << lane;
+        set3(&mut self.position, lane, surface.position);
+        set3(&mut self.normal, lane, surface.geometric_normal);
+        set3(&mut self.shading_normal, lane, surface.shading_normal);
+        self.magnitude[lane] = surface.magnitude;
+        set3(&mut self.wo, lane, wo);
+        set3(&mut self.albedo, lane, albedo);
+        set3(&mut self.throughput, lane, throughput);
+        self.direction[0][lane] = direction.0;
+        self.direction[1][lane] = direction.1;
+        self.roulette[lane] = roulette;
+        if roulette_on {
+            self.roulette_on |= 1 << lane;
+        }
+    }
+
+    /// Lane `lane`'s position.
+    #[inline(always)]
+    pub fn position(&self, lane: usize) -> Vec3 {
+        get3(&self.position, lane)
+    }
+
+    /// The first lane of each half of the lanes that has staged lanes.
+    pub fn halves(&self) -> impl Iterator<Item = usize> + use<> {
+        let staged = self.staged;
+        (0..LANES / 8)
+            .map(|half| 8 * half)
+            .filter(move |base| (staged >> base) & 0xff != 0)
+    }
+
+    /// Lanes `base .. base + 8`, oriented and sampled.
+    #[inline(always)]
+    pub fn vertices(&self, base: usize) -> DiffuseVertices {
+        let position = load3(&self.position, base);
+        let normal = load3(&self.normal, base);
+        let wo = load3(&self.wo, base);
+        let magnitude = load(&self.magnitude, base);
+        let (_, ng, frame) = oriented_frame(normal, load3(&self.shading_normal, base), wo);
+        let local = cosine_hemisphere(
+            load(&self.direction[0], base),
+            load(&self.direction[1], base),
+        );
+        let pdf = local.z.max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI);
+        let wi = frame.to_world(local);
+        let reflected = local.z.simd_gt(f32x8::ZERO);
+        let sampled = !pdf.simd_le(f32x8::ZERO) & !(wi.dot(ng).simd_gt(f32x8::ZERO) ^ reflected);
+        DiffuseVertices {
+            position,
+            normal,
+            magnitude,
+            wo,
+            albedo: load3(&self.albedo, base),
+            throughput: load3(&self.throughput, base),
+            ng,
+            frame,
+            wi,
+            pdf,
+            sampled,
+            next_origin: offset_origin(position, normal, wi, magnitude),
+            roulette: load(&self.roulette, base),
+            roulette_on: lane_mask(self.roulette_on >> base),
+        }
+    }
+}
+
+/// The walks after a diffuse bounce, per lane: which sampled a direction
+/// and which roulette spared, and their next throughputs and rays.
+#[derive(Default)]
+pub(super) struct Continued {
+    pub sampled: u32,
+    pub survives: u32,
+    throughput: Lanes3,
+    origin: Lanes3,
+    dir: Lanes3,
+}
+
+impl Continued {
+    /// Lanes `base .. base + 8` continued from `v`: the throughput times
+    /// the reflectance (a diffuse sample's weight), then roulette, which
+    /// reads the throughput times `scale` (the path tracer's eta², or a
+    /// BDPT camera walk's roulette scale; a diffuse bounce leaves either
+    /// as it is).
+    #[inline(always)]
+    pub fn store(&mut self, v: &DiffuseVertices, scale: f32x8, base: usize) {
+        let (next, dies) = roulette(v.throughput * v.albedo, scale, v.roulette_on, v.roulette);
+        set_bits(&mut self.sampled, v.sampled, base);
+        set_bits(&mut self.survives, !dies, base);
+        store3(next, &mut self.throughput, base);
+        store3(v.next_origin, &mut self.origin, base);
+        store3(v.wi, &mut self.dir, base);
+    }
+
+    /// Lane `lane`'s next throughput, ray origin and direction.
+    #[inline(always)]
+    pub fn get(&self, lane: usize) -> (Vec3, Vec3, Vec3) {
+        (
+            get3(&self.throughput, lane),
+            get3(&self.origin, lane),
+            get3(&self.dir, lane),
+        )
+    }
 }
 
 /// Emissive triangles chosen by light sampling, staged lane by lane.

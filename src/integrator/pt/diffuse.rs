@@ -21,39 +21,22 @@
 //! diffuse vertices in SIMD lanes").
 
 use super::{Arrival, CameraPath, DirectLight, Vertex, ROULETTE_START};
-use crate::bvh::LANES;
 use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::integrator::simd::{
-    cosine_hemisphere, diffuse_eval, get3, lane_mask, load, load3, offset_origin, oriented_frame,
-    power_heuristic, roulette, set3, set_bits, store, store3, Lanes, Lanes3, StagedLights,
+    diffuse_eval, get3, load, power_heuristic, set_bits, store, store3, Continued, Lanes, Lanes3,
+    StagedVertices,
 };
 use crate::light::Light;
 use crate::material::Albedo;
 use crate::scene::Scene;
-use std::f32::consts::FRAC_1_PI;
 use wide::f32x8;
 
 /// The staged inputs of a step's diffuse vertices, and their results.
 #[derive(Default)]
 pub(in crate::integrator) struct DiffuseLanes {
-    /// Lanes staged this step.
-    staged: u32,
-    position: Lanes3,
-    /// The geometric normal as the surface gives it (not yet facing `wo`).
-    normal: Lanes3,
-    shading_normal: Lanes3,
-    magnitude: Lanes,
-    wo: Lanes3,
-    albedo: Lanes3,
-    throughput: Lanes3,
+    vertices: StagedVertices,
     eta_squared: Lanes,
-    direction: [Lanes; 2],
-    roulette: Lanes,
-    /// Lanes whose paths are long enough for roulette.
-    roulette_on: u32,
-    /// The lanes' lights to sample.
-    lights: StagedLights,
     out: Shaded,
 }
 
@@ -68,30 +51,21 @@ struct Shaded {
     shadow_origin: Lanes3,
     shadow_dir: Lanes3,
     shadow_tmax: Lanes,
-    /// Lanes whose BSDF sample gave a direction.
-    sampled: u32,
-    /// Of those, the lanes whose path goes on (roulette spared it).
-    survives: u32,
-    throughput: Lanes3,
+    /// The paths' next throughputs and rays, and which go on.
+    next: Continued,
     pdf: Lanes,
-    next_origin: Lanes3,
-    next_dir: Lanes3,
 }
 
 impl DiffuseLanes {
     /// Forgets the previous step's lanes.
     pub fn clear(&mut self) {
-        self.staged = 0;
-        self.roulette_on = 0;
-        self.lights.clear();
+        self.vertices.clear();
     }
 
     /// Shades every staged lane.
     pub fn shade(&mut self) {
-        for half in 0..LANES / 8 {
-            if (self.staged >> (8 * half)) & 0xff != 0 {
-                self.shade_half(8 * half);
-            }
+        for base in self.vertices.halves() {
+            self.shade_half(base);
         }
     }
 }
@@ -114,7 +88,6 @@ impl CameraPath {
     ) -> Option<Vertex> {
         let numbers = self.sampler.vertex_numbers(true);
         let (u_select, u_point) = numbers.light.expect("a diffuse vertex samples a light");
-        let bit = 1u32 << lane;
         let chosen = scene.light_selector.sample(u_select);
         if let Some((index, pick)) = chosen {
             let Light::Area(light) = &scene.lights[index] else {
@@ -122,28 +95,23 @@ impl CameraPath {
                 let bsdf = material.bsdf(&arrival.surface, arrival.wo);
                 return Some(self.scatter(scene, arrival, &bsdf, numbers));
             };
-            lanes.lights.stage(lane, light, pick, u_point);
+            lanes.vertices.lights.stage(lane, light, pick, u_point);
         } else {
             // No light to sample: the sample adds the throughput times zero.
             self.radiance += self.throughput * Rgb::ZERO;
         }
         let surface = &arrival.surface;
-        let albedo = albedo.at(surface);
-        lanes.staged |= bit;
-        set3(&mut lanes.position, lane, surface.position);
-        set3(&mut lanes.normal, lane, surface.geometric_normal);
-        set3(&mut lanes.shading_normal, lane, surface.shading_normal);
-        lanes.magnitude[lane] = surface.magnitude;
-        set3(&mut lanes.wo, lane, arrival.wo);
-        set3(&mut lanes.albedo, lane, albedo);
-        set3(&mut lanes.throughput, lane, self.throughput);
+        lanes.vertices.stage(
+            lane,
+            surface,
+            arrival.wo,
+            albedo.at(surface),
+            self.throughput,
+            numbers.direction,
+            numbers.roulette,
+            self.segments >= ROULETTE_START,
+        );
         lanes.eta_squared[lane] = self.eta_squared;
-        lanes.direction[0][lane] = numbers.direction.0;
-        lanes.direction[1][lane] = numbers.direction.1;
-        lanes.roulette[lane] = numbers.roulette;
-        if self.segments >= ROULETTE_START {
-            lanes.roulette_on |= bit;
-        }
         None
     }
 
@@ -158,7 +126,7 @@ impl CameraPath {
         let bit = 1u32 << lane;
         let out = &lanes.out;
         let mut direct = None;
-        if lanes.lights.lit & bit != 0 {
+        if lanes.vertices.lights.lit & bit != 0 {
             let nothing = self.throughput * Rgb::ZERO;
             if out.direct_some & bit != 0 {
                 let shadow = (out.shadow_some & bit != 0).then(|| {
@@ -177,21 +145,22 @@ impl CameraPath {
                 self.radiance += nothing;
             }
         }
-        if out.sampled & bit == 0 {
+        if out.next.sampled & bit == 0 {
             return Vertex {
                 direct,
                 continues: false,
             };
         }
         // A diffuse bounce leaves eta² as it is (it multiplies by 1).
-        self.throughput = get3(&out.throughput, lane);
+        let (throughput, origin, dir) = out.next.get(lane);
+        self.throughput = throughput;
         self.previous_pdf = out.pdf[lane];
         self.previous_delta = false;
-        self.previous_position = get3(&lanes.position, lane);
-        self.ray = Ray::new(get3(&out.next_origin, lane), get3(&out.next_dir, lane));
+        self.previous_position = lanes.vertices.position(lane);
+        self.ray = Ray::new(origin, dir);
         Vertex {
             direct,
-            continues: out.survives & bit != 0,
+            continues: out.next.survives & bit != 0,
         }
     }
 }
@@ -199,57 +168,25 @@ impl CameraPath {
 impl DiffuseLanes {
     /// The SIMD pass over lanes `base .. base + 8`.
     fn shade_half(&mut self, base: usize) {
-        let mask = |bits: u32| lane_mask(bits >> base);
-        let position = load3(&self.position, base);
-        let normal = load3(&self.normal, base);
-        let wo = load3(&self.wo, base);
-        let magnitude = load(&self.magnitude, base);
-        let throughput = load3(&self.throughput, base);
-        let albedo = load3(&self.albedo, base);
-
-        // The BSDF (`Material::bsdf`): the normals turned to `wo`'s side,
-        // and the shading frame around the shading normal.
-        let (_, ng, frame) = oriented_frame(normal, load3(&self.shading_normal, base), wo);
-
-        // The next direction (`Bsdf::sample`, diffuse).
-        let local = cosine_hemisphere(
-            load(&self.direction[0], base),
-            load(&self.direction[1], base),
-        );
-        let pdf = local.z.max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI);
-        let wi = frame.to_world(local);
-        let reflected = local.z.simd_gt(f32x8::ZERO);
-        let sampled = !pdf.simd_le(f32x8::ZERO) & !(wi.dot(ng).simd_gt(f32x8::ZERO) ^ reflected);
-        let next_origin = offset_origin(position, normal, wi, magnitude);
-        // A diffuse bounce leaves eta² as it is (it multiplies by 1).
-        let (next, dies) = roulette(
-            throughput * albedo,
-            load(&self.eta_squared, base),
-            mask(self.roulette_on),
-            load(&self.roulette, base),
-        );
-
+        let v = self.vertices.vertices(base);
         let out = &mut self.out;
-        set_bits(&mut out.sampled, sampled, base);
-        set_bits(&mut out.survives, !dies, base);
-        store3(next, &mut out.throughput, base);
-        store(pdf, &mut out.pdf, base);
-        store3(next_origin, &mut out.next_origin, base);
-        store3(wi, &mut out.next_dir, base);
+        out.next.store(&v, load(&self.eta_squared, base), base);
+        store(v.pdf, &mut out.pdf, base);
 
-        if (self.lights.lit >> base) & 0xff == 0 {
+        let lights = &self.vertices.lights;
+        if (lights.lit >> base) & 0xff == 0 {
             set_bits(&mut out.direct_some, f32x8::ZERO, base);
             return;
         }
         // The light sample, the BSDF's value and density there, the weight
         // against BSDF sampling, and the estimate (`direct_light`).
-        let light = self.lights.sample(base, position, normal, magnitude);
-        let (f, bsdf_pdf) = diffuse_eval(albedo, frame.n, ng, light.wi);
+        let light = lights.sample(base, v.position, v.normal, v.magnitude);
+        let (f, bsdf_pdf) = diffuse_eval(v.albedo, v.frame.n, v.ng, light.wi);
         let some = light.some & !f.is_zero();
         let light_pdf = light.pick * light.pdf;
         let weight = power_heuristic(light_pdf, bsdf_pdf);
         let value = (f * light.radiance).scale(weight / light_pdf);
-        let direct = throughput * value;
+        let direct = v.throughput * value;
 
         set_bits(&mut out.direct_some, some, base);
         set_bits(&mut out.shadow_some, some & light.has_ray, base);
