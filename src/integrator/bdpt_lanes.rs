@@ -12,6 +12,11 @@
 //! in the order one sample after another would emit them (a test checks
 //! all three). VCM's camera paths take the same camera lanes, after the
 //! iteration's light pass, each connecting to its own pixel's light path.
+//!
+//! BDPT's camera vertices on Lambertian surfaces are also shaded together,
+//! eight lanes per SIMD operation (`bdpt_diffuse.rs`): each lane makes its
+//! connections here, then one pass samples every staged lane's light and
+//! next direction and follows its walk.
 
 use super::bdpt::{
     camera_splat_weight, light_sample, start_camera_walk, Bidirectional, CameraVertex, Share,
