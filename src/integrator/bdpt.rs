@@ -300,22 +300,12 @@ impl Bidirectional {
         sink: &mut SampleSink,
         connect: &mut impl FnMut(Option<Ray>, Share, &mut Rgb, &mut SampleSink),
     ) {
-        let t = walk.length + 1;
         for v in at.light_vertices {
             if v.length + 1 + walk.length > self.max_depth {
                 break;
             }
             let (l, weight, ray) = connect_vertices(surface, bsdf, wo, walk, v);
-            let throughput = walk.throughput * v.throughput;
-            let share = Share {
-                value: throughput * l,
-                weight,
-                blocked: throughput * Rgb::ZERO,
-                s: v.length + 1,
-                t,
-                recorded: true,
-            };
-            connect(ray, share, result, sink);
+            connect(ray, Share::connection(walk, v, l, weight), result, sink);
         }
         if let Some(pass) = at.merges.filter(|_| MERGE) {
             // After the connections, whenever the caller adds them.
@@ -366,6 +356,31 @@ impl Share {
             t: walk.length + 1,
             recorded: true,
         }
+    }
+
+    /// s > 1, t > 1: the connection of the camera vertex of `walk` to the
+    /// light vertex `v`, `connect_vertices`' estimate `l` with its weight,
+    /// times both subpaths' throughputs.
+    #[inline(always)]
+    pub(super) fn connection(walk: &Walk, v: &LightVertex, l: Rgb, weight: f32) -> Share {
+        let throughput = walk.throughput * v.throughput;
+        Share {
+            value: throughput * l,
+            weight,
+            blocked: throughput * Rgb::ZERO,
+            s: v.length + 1,
+            t: walk.length + 1,
+            recorded: true,
+        }
+    }
+
+    /// Sets the estimate of a share made with a zero one (a connection
+    /// evaluated in SIMD lanes after its place in the list was taken):
+    /// `value` the throughputs times the estimate, with its weight.
+    #[inline(always)]
+    pub(super) fn set_estimate(&mut self, value: Rgb, weight: f32) {
+        self.value = value;
+        self.weight = weight;
     }
 
     /// VCM's merges at a vertex, weighted and with the throughput: they
@@ -548,7 +563,7 @@ pub(super) fn light_sample(
 // Always inlined: with two camera walks (BDPT's and VCM's) calling it, the
 // compiler otherwise keeps it out of line, which costs BDPT 4% (perf gate).
 #[inline(always)]
-fn connect_vertices(
+pub(super) fn connect_vertices(
     surface: &SurfacePoint,
     bsdf: &Bsdf,
     wo: Vec3,

@@ -5,7 +5,8 @@
 //! direction, evaluates the light sample (s = 1) with its weight against
 //! the other strategies, and follows the walk: its MIS quantities, its
 //! throughput and Russian roulette. The connections to the light
-//! vertices stay scalar, between staging and the pass. Every operation is
+//! vertices are staged between staging and the pass, and evaluated in a
+//! pass of their own (`bdpt_connect.rs`). Every operation is
 //! the scalar code's (`Bidirectional::camera_vertex`, `light_sample`,
 //! `Walk::follow`) in its order, so each sample stays bit for bit what it
 //! is alone (`tests/it/determinism.rs`).

@@ -14,13 +14,16 @@
 //! iteration's light pass, each connecting to its own pixel's light path.
 //!
 //! BDPT's camera vertices on Lambertian surfaces are also shaded together,
-//! eight lanes per SIMD operation (`bdpt_diffuse.rs`): each lane makes its
-//! connections here, then one pass samples every staged lane's light and
-//! next direction and follows its walk.
+//! eight lanes per SIMD operation (`bdpt_diffuse.rs`): each lane stages
+//! its connections to Lambertian light vertices as pairs
+//! (`bdpt_connect.rs`) and makes the others here, then one pass evaluates
+//! the pairs, and another samples every staged lane's light and next
+//! direction and follows its walk.
 
 use super::bdpt::{
     camera_splat_weight, light_sample, start_camera_walk, Bidirectional, CameraVertex, Share,
 };
+use super::bdpt_connect::ConnectionLanes;
 use super::bdpt_diffuse::DiffuseCameraLanes;
 use super::light_path::{begin_light_path, camera_splat_unshadowed, light_vertex, looks_further};
 use super::sink::SampleSink;
@@ -38,12 +41,23 @@ use crate::scene::Scene;
 use glam::Vec3;
 
 /// What the lanes keep from sample to sample: each lane's light vertices
-/// and splats, and the connections waiting on their shadow rays.
+/// and splats, and the camera lanes' working memory.
 #[derive(Default)]
 pub struct LaneState {
     vertices: [Vec<LightVertex>; LANES],
     splats: [Vec<(u32, Rgb)>; LANES],
+    camera: CameraLanes,
+}
+
+/// What a step of the camera lanes fills: the shares waiting on their
+/// shadow rays, the diffuse vertices staged for their SIMD pass, and the
+/// connections staged for theirs. Kept from step to step, so that no
+/// step allocates or clears more than it uses.
+#[derive(Default)]
+struct CameraLanes {
     connections: Vec<(usize, Option<Ray>, Share)>,
+    diffuse: DiffuseCameraLanes,
+    pairs: ConnectionLanes,
 }
 
 impl Bidirectional {
@@ -78,7 +92,7 @@ impl Bidirectional {
                 samples,
                 None,
                 |k| &vertices[k],
-                &mut state.connections,
+                &mut state.camera,
             );
             out.copy_from_slice(&estimates[..samples.len()]);
         });
@@ -170,8 +184,13 @@ impl Bidirectional {
         samples: &[PixelSample],
         merges: Option<&LightPass>,
         vertices: impl Fn(usize) -> &'a [LightVertex],
-        connections: &mut Vec<(usize, Option<Ray>, Share)>,
+        lanes: &mut CameraLanes,
     ) -> [Rgb; LANES] {
+        let CameraLanes {
+            connections,
+            diffuse,
+            pairs,
+        } = lanes;
         let merging = merges.map_or(MergeWeights::NONE, |pass| pass.merging);
         let mut results = [Rgb::ZERO; LANES];
         let mut walks = [IDLE; LANES];
@@ -194,7 +213,6 @@ impl Bidirectional {
         let unused = Ray::new(Vec3::ZERO, Vec3::Z);
         let mut rays = [unused; LANES];
         let mut hits: [Option<Hit>; LANES] = [None; LANES];
-        let mut diffuse = DiffuseCameraLanes::default();
         while active != 0 {
             for_lanes(active, |k| {
                 rays[k] = Ray::new(walks[k].origin, walks[k].dir)
@@ -203,6 +221,9 @@ impl Bidirectional {
             let mut going_on = 0u32;
             connections.clear();
             diffuse.clear();
+            let mut most = 0;
+            for_lanes(active, |k| most += vertices(k).len());
+            pairs.clear(most);
             for_lanes(active, |k| {
                 let at = CameraVertex {
                     scene,
@@ -243,19 +264,15 @@ impl Bidirectional {
                                 connections.push((k, ray, Share::light_sample(walk, l, weight)));
                             }
                         }
-                        let mut wait =
-                            |ray: Option<Ray>, share: Share, _: &mut Rgb, _: &mut SampleSink| {
-                                connections.push((k, ray, share))
-                            };
-                        self.connect_light_vertices::<MERGE>(
-                            at,
+                        self.connect_diffuse(
+                            k,
                             walk,
                             &surface,
                             &bsdf,
                             wo,
-                            &mut results[k],
-                            &mut no_records,
-                            &mut wait,
+                            at.light_vertices,
+                            connections,
+                            pairs,
                         );
                         let albedo = albedo.at(&surface);
                         diffuse.stage(
@@ -287,6 +304,7 @@ impl Bidirectional {
                     }
                 }
             });
+            pairs.connect(connections);
             if diffuse.staged() != 0 {
                 diffuse.shade();
                 for_lanes(diffuse.staged(), |k| {
@@ -335,7 +353,7 @@ impl VertexMerging {
                 samples,
                 Some(pass),
                 |k| pass.path_of(samples[k].x, samples[k].y),
-                &mut state.connections,
+                &mut state.camera,
             );
             out.copy_from_slice(&estimates[..samples.len()]);
         });

@@ -11,6 +11,7 @@
 //! this one; `render/` never names one.
 
 mod bdpt;
+mod bdpt_connect;
 mod bdpt_diffuse;
 mod bdpt_lanes;
 mod connect;

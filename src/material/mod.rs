@@ -298,6 +298,17 @@ impl Bsdf {
         self.frame.n
     }
 
+    /// A Lambertian BSDF's reflectance, shading normal and geometric normal
+    /// (both on the side of `wo`), for code that evaluates it in SIMD
+    /// lanes; `None` for every other lobe.
+    #[inline(always)]
+    pub fn lambertian(&self) -> Option<(Rgb, Vec3, Vec3)> {
+        match self.kind {
+            BsdfKind::Diffuse { albedo } => Some((albedo, self.frame.n, self.ng)),
+            _ => None,
+        }
+    }
+
     /// `f(wo, wi) · |cos θi|` for radiance, with θi measured from the
     /// shading normal; zero for delta lobes, and where the shading and
     /// geometric normals disagree on which side `wi` is.
