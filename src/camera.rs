@@ -97,6 +97,16 @@ impl Camera {
         self.forward
     }
 
+    /// The image's right and up directions (unit, orthogonal to `forward`).
+    pub fn right_up(&self) -> (Vec3, Vec3) {
+        (self.right, self.up)
+    }
+
+    /// Distance along `forward` from the lens to the plane in focus.
+    pub fn focus_distance(&self) -> f32 {
+        self.focus_distance
+    }
+
     /// Distance from the pinhole to an image plane whose pixels are one unit
     /// wide. Densities on that plane are "per pixel", which makes the box
     /// filter of the contract and light-tracing splats agree (Georgiev 2012, §5.1).

@@ -13,7 +13,7 @@
 //! (`tests/it/determinism.rs`).
 
 use super::bdpt::{connect_vertices, Bidirectional, Share};
-use super::simd::{diffuse_eval, offset_origin, V3};
+use super::simd::{diffuse_eval, offset_origin, shading_correction, V3};
 use super::walk::{LightVertex, Walk};
 use crate::color::Rgb;
 use crate::geometry::{Ray, SurfacePoint};
@@ -315,27 +315,6 @@ fn connect_block(block: &mut PairBlock) {
     store3(origin, &mut block.ray_origin);
     store3(to_target.div(length), &mut block.ray_dir);
     store(length, &mut block.ray_tmax);
-}
-
-/// `Bsdf::shading_correction` lane by lane: |wo·ns| |wi·ng| / (|wo·ng|
-/// |wi·ns|), with the scalar code's special cases (one, zero or NaN by
-/// the sign of the product where the normals are the same).
-#[inline(always)]
-fn shading_correction(wo: V3, wi: V3, shading: V3, facing: V3) -> f32x8 {
-    let zero = f32x8::ZERO;
-    let flat =
-        shading.x.simd_eq(facing.x) & shading.y.simd_eq(facing.y) & shading.z.simd_eq(facing.z);
-    let d = wo.dot(facing).abs() * wi.dot(facing).abs();
-    let flat_value = d.simd_gt(zero).select(
-        f32x8::ONE,
-        d.simd_le(zero).select(zero, f32x8::splat(f32::NAN)),
-    );
-    let denominator = wo.dot(facing).abs() * wi.dot(shading).abs();
-    let tilted = denominator.simd_le(zero).select(
-        zero,
-        wo.dot(shading).abs() * wi.dot(facing).abs() / denominator,
-    );
-    flat.select(flat_value, tilted)
 }
 
 #[cfg(test)]

@@ -13,7 +13,8 @@
 
 use super::bdpt::Share;
 use super::simd::{
-    diffuse_eval, get3, load, set_bits, store, store3, Continued, Lanes, Lanes3, StagedVertices,
+    diffuse_eval, follow_weights, get3, load, set_bits, store, store3, Continued, Lanes, Lanes3,
+    StagedVertices,
 };
 use super::walk::Walk;
 use super::ROULETTE_START;
@@ -218,20 +219,13 @@ impl DiffuseCameraLanes {
             store(light.ray_tmax, &mut out.ray_tmax, base);
         }
 
-        // `Walk::follow`: the MIS quantities (`update_weights`, report
-        // eqs. 34-36), the throughput, the next ray and roulette.
-        let cos_out = v.wi.dot(v.normal).abs();
-        // `Bsdf::pdfs` gives the reverse density only where the direction
-        // passes its own side test, in world space.
-        let wi_reflected = v.wi.dot(v.ng).simd_gt(zero);
-        let wi_side = wi_reflected & !(v.wi.dot(v.frame.n).simd_gt(zero) ^ wi_reflected);
-        let reverse = mis(wi_side.select(reverse_pdf, zero));
-        let scale = mis(cos_out / v.pdf);
-        let next_d_vc = scale * (d_vc * reverse + d_vcm + vm);
-        let next_d_vm = scale * (d_vm * reverse + d_vcm * load(&self.vc, base) + one);
-        let next_d_vcm = mis(one / v.pdf);
+        // `Walk::follow`: the MIS quantities, the throughput (times the
+        // sample's weight, the reflectance), the next ray and roulette.
+        let (next_d_vcm, next_d_vc, next_d_vm) =
+            follow_weights(&v, (d_vcm, d_vc, d_vm), (vm, load(&self.vc, base)));
         let out = &mut self.out;
-        out.next.store(&v, load(&self.roulette_scale, base), base);
+        out.next
+            .store(&v, v.albedo, load(&self.roulette_scale, base), base);
         store(next_d_vcm, &mut out.d_vcm, base);
         store(next_d_vc, &mut out.d_vc, base);
         store(next_d_vm, &mut out.d_vm, base);

@@ -18,14 +18,20 @@
 //! its connections to Lambertian light vertices as pairs
 //! (`bdpt_connect.rs`) and makes the others here, then one pass evaluates
 //! the pairs, and another samples every staged lane's light and next
-//! direction and follows its walk.
+//! direction and follows its walk. The light walks' Lambertian vertices
+//! are shaded likewise (`bdpt_light_diffuse.rs`), their splats and next
+//! directions in one pass per step.
 
 use super::bdpt::{
     camera_splat_weight, light_sample, start_camera_walk, Bidirectional, CameraVertex, Share,
 };
 use super::bdpt_connect::ConnectionLanes;
 use super::bdpt_diffuse::DiffuseCameraLanes;
-use super::light_path::{begin_light_path, camera_splat_unshadowed, light_vertex, looks_further};
+use super::bdpt_light_diffuse::{DiffuseLightLanes, SplatCamera};
+use super::light_path::{
+    begin_light_path, camera_splat_unshadowed, light_arrive, light_goes_on, light_scatter,
+    looks_further,
+};
 use super::sink::SampleSink;
 use super::vcm::{LightPass, VertexMerging};
 use super::walk::{light_paths_per_pass, LightVertex, MergeWeights, Walk};
@@ -46,6 +52,8 @@ use glam::Vec3;
 pub struct LaneState {
     vertices: [Vec<LightVertex>; LANES],
     splats: [Vec<(u32, Rgb)>; LANES],
+    /// The light lanes' diffuse vertices, staged for their SIMD pass.
+    light_diffuse: DiffuseLightLanes,
     camera: CameraLanes,
 }
 
@@ -131,40 +139,87 @@ impl Bidirectional {
         let mut shadow_rays = [unused; LANES];
         // A lane's splat waiting on its shadow ray: at most one per step.
         let mut waiting = [(0u32, Rgb::ZERO); LANES];
+        let splat_camera = SplatCamera::new(camera, paths);
+        let diffuse = &mut state.light_diffuse;
         while active != 0 {
             for_lanes(active, |k| {
                 rays[k] = Ray::new(walks[k].origin, walks[k].dir)
             });
             scene.intersect_lanes(&rays, active, &mut hits);
             let (mut shadowed, mut going_on) = (0u32, 0u32);
+            diffuse.clear();
             for_lanes(active, |k| {
                 let Some(hit) = hits[k] else {
                     return;
                 };
                 let (vertices, splats) = (&mut state.vertices[k], &mut state.splats[k]);
-                let mut visit = |v: &LightVertex| {
-                    vertices.push(*v);
-                    let Some((c, value, ray)) = camera_splat_unshadowed(camera, lens[k], v, paths)
-                    else {
-                        return;
-                    };
-                    let weighted = value * camera_splat_weight(&c, v, paths, MergeWeights::NONE);
-                    match ray {
-                        Some(ray) => {
-                            shadow_rays[k] = ray;
-                            waiting[k] = (c.pixel, weighted);
-                            shadowed |= 1 << k;
-                        }
-                        None => splats.push((c.pixel, weighted)),
+                let (walk, sampler) = (&mut walks[k], &mut samplers[k]);
+                let (surface, wo, material) = light_arrive(scene, walk, &hit);
+                match material {
+                    // Kept for the camera walks here, shaded and splatted
+                    // in `diffuse.shade` (see `bdpt_light_diffuse.rs`).
+                    Material::Diffuse { albedo } if walk.weighted => {
+                        let numbers =
+                            light_goes_on(walk, max_depth).then(|| sampler.walk_numbers());
+                        vertices.push(LightVertex {
+                            surface,
+                            bsdf: material.bsdf(&surface, wo),
+                            wo,
+                            throughput: walk.throughput,
+                            length: walk.length,
+                            d_vcm: walk.d_vcm,
+                            d_vc: walk.d_vc,
+                            d_vm: walk.d_vm,
+                        });
+                        let albedo = albedo.at(&surface);
+                        diffuse.stage(k, &surface, wo, albedo, walk, lens[k], numbers);
                     }
-                };
-                let sampler = &mut samplers[k];
-                if light_vertex(scene, sampler, &mut walks[k], max_depth, &hit, &mut visit)
-                    && looks_further(&walks[k], max_depth)
-                {
-                    going_on |= 1 << k;
+                    _ => {
+                        let mut visit = |v: &LightVertex| {
+                            vertices.push(*v);
+                            let Some((c, value, ray)) =
+                                camera_splat_unshadowed(camera, lens[k], v, paths)
+                            else {
+                                return;
+                            };
+                            let weighted =
+                                value * camera_splat_weight(&c, v, paths, MergeWeights::NONE);
+                            match ray {
+                                Some(ray) => {
+                                    shadow_rays[k] = ray;
+                                    waiting[k] = (c.pixel, weighted);
+                                    shadowed |= 1 << k;
+                                }
+                                None => splats.push((c.pixel, weighted)),
+                            }
+                        };
+                        let vertex = (surface, wo, material);
+                        if light_scatter(sampler, walk, max_depth, vertex, &mut visit)
+                            && looks_further(walk, max_depth)
+                        {
+                            going_on |= 1 << k;
+                        }
+                    }
                 }
             });
+            if diffuse.staged() != 0 {
+                diffuse.shade(&splat_camera);
+                for_lanes(diffuse.staged(), |k| {
+                    if let Some((pixel, value, ray)) = diffuse.splat(k, camera.width()) {
+                        match ray {
+                            Some(ray) => {
+                                shadow_rays[k] = ray;
+                                waiting[k] = (pixel, value);
+                                shadowed |= 1 << k;
+                            }
+                            None => state.splats[k].push((pixel, value)),
+                        }
+                    }
+                    if diffuse.follow(k, &mut walks[k]) && looks_further(&walks[k], max_depth) {
+                        going_on |= 1 << k;
+                    }
+                });
+            }
             let blocked = scene.occluded_lanes(&shadow_rays, shadowed);
             for_lanes(shadowed & !blocked, |k| state.splats[k].push(waiting[k]));
             active = going_on;

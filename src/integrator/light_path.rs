@@ -7,8 +7,8 @@ use super::walk::{start_light_walk, LightStart, LightVertex, MergeWeights, Walk}
 use crate::bvh::Hit;
 use crate::camera::Camera;
 use crate::color::{is_black, Rgb};
-use crate::geometry::Ray;
-use crate::material::Transport;
+use crate::geometry::{Ray, SurfacePoint};
+use crate::material::{Material, Transport};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -72,16 +72,47 @@ pub fn light_vertex(
     hit: &Hit,
     visit: &mut impl FnMut(&LightVertex),
 ) -> bool {
+    let (surface, wo, material) = light_arrive(scene, walk, hit);
+    light_scatter(sampler, walk, max_depth, (surface, wo, material), visit)
+}
+
+/// The first part of a light vertex: the surface the walk's ray found at
+/// `hit`, the direction back along the ray, and the material, the walk's
+/// weights carried to the vertex.
+#[inline(always)]
+pub fn light_arrive<'a>(
+    scene: &'a Scene,
+    walk: &mut Walk,
+    hit: &Hit,
+) -> (SurfacePoint, Vec3, &'a Material) {
     let surface = scene.surface(hit);
     let wo = -walk.dir;
     walk.arrive(hit.t, wo.dot(surface.geometric_normal).abs());
     let material = &scene.materials[scene.shading[hit.triangle as usize].material as usize];
+    (surface, wo, material)
+}
+
+/// Whether a light walk at a vertex goes on to look for another: a
+/// further vertex would need at least one more segment to reach the camera.
+#[inline(always)]
+pub fn light_goes_on(walk: &Walk, max_depth: u32) -> bool {
+    walk.length + 2 <= max_depth
+}
+
+/// The rest of a light vertex after `light_arrive`: the visit, and the
+/// walk followed. Returns whether it goes on.
+#[inline(always)]
+pub fn light_scatter(
+    sampler: &mut Sampler,
+    walk: &mut Walk,
+    max_depth: u32,
+    (surface, wo, material): (SurfacePoint, Vec3, &Material),
+    visit: &mut impl FnMut(&LightVertex),
+) -> bool {
     let bsdf = material.bsdf(&surface, wo);
-    // A further vertex would need at least one more segment to reach the camera.
-    let goes_on = walk.length + 2 <= max_depth;
     // The next direction before the visit's shadow ray (see `Walk::follow`);
     // the visit draws no numbers, so they are the same either way.
-    let numbers = goes_on.then(|| sampler.walk_numbers());
+    let numbers = light_goes_on(walk, max_depth).then(|| sampler.walk_numbers());
     let sampled = numbers.and_then(|n| bsdf.sample(wo, n.direction, n.lobe, Transport::Importance));
 
     if !bsdf.is_delta() {

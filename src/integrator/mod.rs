@@ -14,6 +14,7 @@ mod bdpt;
 mod bdpt_connect;
 mod bdpt_diffuse;
 mod bdpt_lanes;
+mod bdpt_light_diffuse;
 mod connect;
 mod lanes;
 mod light_path;

@@ -372,13 +372,14 @@ pub(super) struct Continued {
 
 impl Continued {
     /// Lanes `base .. base + 8` continued from `v`: the throughput times
-    /// the reflectance (a diffuse sample's weight), then roulette, which
+    /// the sample's `weight` (the reflectance, for radiance; for
+    /// importance, times the shading correction), then roulette, which
     /// reads the throughput times `scale` (the path tracer's eta², or a
-    /// BDPT camera walk's roulette scale; a diffuse bounce leaves either
-    /// as it is).
+    /// BDPT walk's roulette scale; a diffuse bounce leaves either as it
+    /// is).
     #[inline(always)]
-    pub fn store(&mut self, v: &DiffuseVertices, scale: f32x8, base: usize) {
-        let (next, dies) = roulette(v.throughput * v.albedo, scale, v.roulette_on, v.roulette);
+    pub fn store(&mut self, v: &DiffuseVertices, weight: V3, scale: f32x8, base: usize) {
+        let (next, dies) = roulette(v.throughput * weight, scale, v.roulette_on, v.roulette);
         set_bits(&mut self.sampled, v.sampled, base);
         set_bits(&mut self.survives, !dies, base);
         store3(next, &mut self.throughput, base);
@@ -527,6 +528,56 @@ pub(super) fn diffuse_eval(albedo: V3, n: V3, ng: V3, wi: V3) -> (V3, f32x8) {
     let f = V3::select(lobe & !cos.simd_le(f32x8::ZERO), f, V3::zero());
     let pdf = lobe.select(cos.max(f32x8::ZERO) * f32x8::splat(FRAC_1_PI), f32x8::ZERO);
     (f, pdf)
+}
+
+/// `Bsdf::shading_correction` lane by lane: |wo·ns| |wi·ng| / (|wo·ng|
+/// |wi·ns|), with the scalar code's special cases (one, zero or NaN by
+/// the sign of the product where the normals are the same).
+#[inline(always)]
+pub(super) fn shading_correction(wo: V3, wi: V3, shading: V3, facing: V3) -> f32x8 {
+    let zero = f32x8::ZERO;
+    let flat =
+        shading.x.simd_eq(facing.x) & shading.y.simd_eq(facing.y) & shading.z.simd_eq(facing.z);
+    let d = wo.dot(facing).abs() * wi.dot(facing).abs();
+    let flat_value = d.simd_gt(zero).select(
+        f32x8::ONE,
+        d.simd_le(zero).select(zero, f32x8::splat(f32::NAN)),
+    );
+    let denominator = wo.dot(facing).abs() * wi.dot(shading).abs();
+    let tilted = denominator.simd_le(zero).select(
+        zero,
+        wo.dot(shading).abs() * wi.dot(facing).abs() / denominator,
+    );
+    flat.select(flat_value, tilted)
+}
+
+/// The MIS quantities of a walk after the diffuse bounce of `v` (a
+/// weighted walk's `update_weights`, report eqs. 34-36), from its
+/// `d_vcm`, `d_vc`, `d_vm` at the vertex and the merging constants `vm`
+/// and `vc`; returns the new `d_vcm`, `d_vc`, `d_vm`.
+#[inline(always)]
+pub(super) fn follow_weights(
+    v: &DiffuseVertices,
+    (d_vcm, d_vc, d_vm): (f32x8, f32x8, f32x8),
+    (vm, vc): (f32x8, f32x8),
+) -> (f32x8, f32x8, f32x8) {
+    let (zero, one) = (f32x8::ZERO, f32x8::ONE);
+    let mis = |x: f32x8| x * x;
+    // The density of sampling `wo` back from `wi` (`Bsdf::pdfs`' reverse
+    // density), given only where `wi` passes the BSDF's own side test in
+    // world space: a direction sampled at a grazing angle can fail it even
+    // though its local form passed.
+    let reverse_pdf = v.wo.dot(v.frame.n).max(zero) * f32x8::splat(FRAC_1_PI);
+    let wi_reflected = v.wi.dot(v.ng).simd_gt(zero);
+    let wi_side = wi_reflected & !(v.wi.dot(v.frame.n).simd_gt(zero) ^ wi_reflected);
+    let reverse = mis(wi_side.select(reverse_pdf, zero));
+    let cos_out = v.wi.dot(v.normal).abs();
+    let scale = mis(cos_out / v.pdf);
+    (
+        mis(one / v.pdf),
+        scale * (d_vc * reverse + d_vcm + vm),
+        scale * (d_vm * reverse + d_vcm * vc + one),
+    )
 }
 
 /// Lanes `base .. base + 8` of `a`.

@@ -170,7 +170,8 @@ impl DiffuseLanes {
     fn shade_half(&mut self, base: usize) {
         let v = self.vertices.vertices(base);
         let out = &mut self.out;
-        out.next.store(&v, load(&self.eta_squared, base), base);
+        out.next
+            .store(&v, v.albedo, load(&self.eta_squared, base), base);
         store(v.pdf, &mut out.pdf, base);
 
         let lights = &self.vertices.lights;
