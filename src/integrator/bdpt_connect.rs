@@ -13,6 +13,7 @@
 //! (`tests/it/determinism.rs`).
 
 use super::bdpt::{connect_vertices, Bidirectional, Share};
+use super::bdpt_diffuse::Shares;
 use super::simd::{diffuse_eval, offset_origin, shading_correction, V3};
 use super::walk::{LightVertex, Walk};
 use crate::color::Rgb;
@@ -193,7 +194,7 @@ impl Bidirectional {
         bsdf: &Bsdf,
         wo: Vec3,
         light_vertices: &[LightVertex],
-        connections: &mut Vec<(usize, Option<Ray>, Share)>,
+        connections: &mut Shares,
         pairs: &mut ConnectionLanes,
     ) {
         let vm = walk.merging.vm;

@@ -11,7 +11,8 @@
 //! `Walk::follow`) in its order, so each sample stays bit for bit what it
 //! is alone (`tests/it/determinism.rs`).
 
-use super::bdpt::Share;
+use super::bdpt::{light_sample, Bidirectional, CameraVertex, Share};
+use super::bdpt_connect::ConnectionLanes;
 use super::simd::{
     diffuse_eval, follow_weights, get3, load, set_bits, store, store3, Continued, Lanes, Lanes3,
     StagedVertices,
@@ -21,10 +22,82 @@ use super::ROULETTE_START;
 use crate::bvh::LANES;
 use crate::color::Rgb;
 use crate::geometry::{Ray, SurfacePoint};
-use crate::light::AreaLight;
+use crate::light::{AreaLight, Light};
+use crate::material::Albedo;
+use crate::sampling::Sampler;
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 use wide::f32x8;
+
+/// A step's shares waiting on their shadow rays (lane, ray, share), in
+/// the order they add up.
+pub(super) type Shares = Vec<(usize, Option<Ray>, Share)>;
+
+impl Bidirectional {
+    /// Lane `lane`'s camera vertex on `walk` at a Lambertian surface (its
+    /// surface, `wo` and material, of reflectance `albedo`), as
+    /// `camera_scatter` takes it, in three parts: the light sample (s = 1)
+    /// staged in `diffuse` with its place taken in `connections`, or made
+    /// at once for a light other than an emissive triangle; the
+    /// connections to the light vertices (`connect_diffuse`, staged in
+    /// `pairs` or made at once); and the vertex staged in `diffuse` for
+    /// its next direction.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn stage_diffuse_camera_vertex(
+        &self,
+        lane: usize,
+        at: CameraVertex,
+        walk: &Walk,
+        sampler: &mut Sampler,
+        (surface, wo, material): (&SurfacePoint, Vec3, u32),
+        albedo: &Albedo,
+        (connections, diffuse, pairs): (&mut Shares, &mut DiffuseCameraLanes, &mut ConnectionLanes),
+    ) {
+        let scene = at.scene;
+        let bsdf = scene.materials[material as usize].bsdf(surface, wo);
+        let numbers = sampler.vertex_numbers(true);
+        let (u_select, u_point) = numbers.light.expect("diffuse vertices sample lights");
+        let chosen = scene.light_selector.sample(u_select);
+        match chosen.and_then(|(index, pick)| match &scene.lights[index] {
+            Light::Area(light) => Some((light, pick)),
+            _ => None,
+        }) {
+            Some((light, pick)) => {
+                diffuse.stage_light(lane, light, pick, u_point, connections.len());
+                // Its place in the list, filled after the pass.
+                let waiting = Share::light_sample(walk, Rgb::ZERO, 0.0);
+                connections.push((lane, None, waiting));
+            }
+            None => {
+                let (l, weight, ray) =
+                    light_sample(scene, surface, &bsdf, wo, walk, u_select, u_point);
+                connections.push((lane, ray, Share::light_sample(walk, l, weight)));
+            }
+        }
+        let light_vertices = at.light_vertices;
+        self.connect_diffuse(
+            lane,
+            walk,
+            surface,
+            &bsdf,
+            wo,
+            light_vertices,
+            connections,
+            pairs,
+        );
+        let albedo = albedo.at(surface);
+        diffuse.stage(
+            lane,
+            surface,
+            wo,
+            albedo,
+            walk,
+            numbers.direction,
+            numbers.roulette,
+        );
+    }
+}
 
 /// The staged inputs of a step's diffuse camera vertices, and their results.
 #[derive(Default)]

@@ -22,11 +22,9 @@
 //! are shaded likewise (`bdpt_light_diffuse.rs`), their splats and next
 //! directions in one pass per step.
 
-use super::bdpt::{
-    camera_splat_weight, light_sample, start_camera_walk, Bidirectional, CameraVertex, Share,
-};
+use super::bdpt::{camera_splat_weight, start_camera_walk, Bidirectional, CameraVertex, Share};
 use super::bdpt_connect::ConnectionLanes;
-use super::bdpt_diffuse::DiffuseCameraLanes;
+use super::bdpt_diffuse::{DiffuseCameraLanes, Shares};
 use super::bdpt_light_diffuse::{DiffuseLightLanes, SplatCamera};
 use super::light_path::{
     begin_light_path, camera_splat_unshadowed, light_arrive, light_goes_on, light_scatter,
@@ -40,7 +38,6 @@ use crate::bvh::{for_lanes, Hit, LANES};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::Ray;
-use crate::light::Light;
 use crate::material::Material;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -63,7 +60,7 @@ pub struct LaneState {
 /// step allocates or clears more than it uses.
 #[derive(Default)]
 struct CameraLanes {
-    connections: Vec<(usize, Option<Ray>, Share)>,
+    connections: Shares,
     diffuse: DiffuseCameraLanes,
     pairs: ConnectionLanes,
 }
@@ -296,50 +293,15 @@ impl Bidirectional {
                 match &scene.materials[material as usize] {
                     // BDPT's diffuse vertices are staged for `diffuse.shade`
                     // (see `bdpt_diffuse.rs`), their connections made here.
-                    Material::Diffuse { albedo } if !MERGE => {
-                        let bsdf = scene.materials[material as usize].bsdf(&surface, wo);
-                        let numbers = sampler.vertex_numbers(true);
-                        let (u_select, u_point) =
-                            numbers.light.expect("diffuse vertices sample lights");
-                        let chosen = scene.light_selector.sample(u_select);
-                        match chosen.and_then(|(index, pick)| match &scene.lights[index] {
-                            Light::Area(light) => Some((light, pick)),
-                            _ => None,
-                        }) {
-                            Some((light, pick)) => {
-                                diffuse.stage_light(k, light, pick, u_point, connections.len());
-                                // Its place in the list, filled after the pass.
-                                let waiting = Share::light_sample(walk, Rgb::ZERO, 0.0);
-                                connections.push((k, None, waiting));
-                            }
-                            None => {
-                                let (l, weight, ray) = light_sample(
-                                    scene, &surface, &bsdf, wo, walk, u_select, u_point,
-                                );
-                                connections.push((k, ray, Share::light_sample(walk, l, weight)));
-                            }
-                        }
-                        self.connect_diffuse(
-                            k,
-                            walk,
-                            &surface,
-                            &bsdf,
-                            wo,
-                            at.light_vertices,
-                            connections,
-                            pairs,
-                        );
-                        let albedo = albedo.at(&surface);
-                        diffuse.stage(
-                            k,
-                            &surface,
-                            wo,
-                            albedo,
-                            walk,
-                            numbers.direction,
-                            numbers.roulette,
-                        );
-                    }
+                    Material::Diffuse { albedo } if !MERGE => self.stage_diffuse_camera_vertex(
+                        k,
+                        at,
+                        walk,
+                        sampler,
+                        (&surface, wo, material),
+                        albedo,
+                        (connections, diffuse, pairs),
+                    ),
                     _ => {
                         let mut wait =
                             |ray: Option<Ray>, share: Share, _: &mut Rgb, _: &mut SampleSink| {
