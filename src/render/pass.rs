@@ -121,13 +121,15 @@ impl Pass<'_> {
             let mut pending: Option<(&[Tile], Vec<Option<TileOutput>>)> = None;
             for chunk in tiles.chunks_mut(batch) {
                 let mut render = || {
+                    // A worker's memory (light vertices, lanes) is made
+                    // once per run of tiles rayon hands it, not per tile.
                     chunk
                         .par_iter_mut()
-                        .map(|tile| {
+                        .map_init(ThreadState::default, |state, tile| {
                             if skip() || tile.converged {
                                 return None;
                             }
-                            Some(self.tile(tile, light))
+                            Some(self.tile(tile, light, state))
                         })
                         .collect::<Vec<_>>()
                 };
@@ -145,17 +147,21 @@ impl Pass<'_> {
     }
 
     /// Adds this pass's samples to every pixel of `tile`.
-    fn tile(&self, tile: &mut Tile, light: Option<&LightPass>) -> TileOutput {
+    fn tile(
+        &self,
+        tile: &mut Tile,
+        light: Option<&LightPass>,
+        state: &mut ThreadState,
+    ) -> TileOutput {
         let sink = || SampleSink {
             strategies: self.keep_strategies.then(Vec::new),
             ..SampleSink::default()
         };
         let mut sinks = [sink(), sink()];
-        let mut state = ThreadState::default();
         // The lanes record no strategies: a pass that keeps them takes its
         // samples one by one, the same samples.
         if self.integrator.samples_in_lanes() && !self.keep_strategies {
-            self.tile_in_lanes(tile, &mut sinks, &mut state, light);
+            self.tile_in_lanes(tile, &mut sinks, state, light);
         } else {
             for y in tile.y0..tile.y1 {
                 for x in tile.x0..tile.x1 {
@@ -168,7 +174,7 @@ impl Pass<'_> {
                             self.scene,
                             self.camera,
                             pixel,
-                            &mut state,
+                            state,
                             &mut sinks[half],
                             light,
                         );
