@@ -25,19 +25,20 @@
 use super::bdpt::{camera_splat_weight, start_camera_walk, Bidirectional, CameraVertex, Share};
 use super::bdpt_connect::ConnectionLanes;
 use super::bdpt_diffuse::{DiffuseCameraLanes, Shares};
-use super::bdpt_light_diffuse::{DiffuseLightLanes, SplatCamera};
+use super::bdpt_light_diffuse::{DiffuseLightLanes, LightStarts, SplatCamera};
+use super::connect::sample_lens;
 use super::light_path::{
-    begin_light_path, camera_splat_unshadowed, light_arrive, light_goes_on, light_scatter,
-    looks_further,
+    camera_splat_unshadowed, light_arrive, light_goes_on, light_scatter, looks_further,
 };
 use super::sink::SampleSink;
 use super::vcm::{LightPass, VertexMerging};
-use super::walk::{light_paths_per_pass, LightVertex, MergeWeights, Walk};
+use super::walk::{light_paths_per_pass, start_walk_on, LightVertex, MergeWeights, Walk};
 use super::PixelSample;
 use crate::bvh::{for_lanes, Hit, LANES};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::Ray;
+use crate::light::Light;
 use crate::material::Material;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -49,7 +50,9 @@ use glam::Vec3;
 pub struct LaneState {
     vertices: [Vec<LightVertex>; LANES],
     splats: [Vec<(u32, Rgb)>; LANES],
-    /// The light lanes' diffuse vertices, staged for their SIMD pass.
+    /// The light lanes' starts and diffuse vertices, staged for their
+    /// SIMD passes.
+    light_starts: LightStarts,
     light_diffuse: DiffuseLightLanes,
     camera: CameraLanes,
 }
@@ -120,15 +123,39 @@ impl Bidirectional {
         let mut walks = [IDLE; LANES];
         let mut lens = [Vec3::ZERO; LANES];
         let mut active = 0u32;
+        // `begin_light_path`, a start on an emissive triangle staged for
+        // the SIMD pass (see `bdpt_light_diffuse.rs`).
+        let merging = MergeWeights::NONE;
+        let starts = &mut state.light_starts;
+        starts.clear();
         for k in 0..samples.len() {
             state.vertices[k].clear();
-            let started = begin_light_path(scene, camera, &mut samplers[k], MergeWeights::NONE);
-            if let Some((start, lens_point)) = started {
-                (walks[k], lens[k]) = (start.walk, lens_point);
+            let sampler = &mut samplers[k];
+            sampler.start_vertex();
+            let Some((index, pick)) = scene.light_selector.sample(sampler.next_1d()) else {
+                continue;
+            };
+            if let Light::Area(light) = &scene.lights[index] {
+                let numbers = (sampler.next_2d(), sampler.next_2d());
+                starts.stage(k, light, pick, numbers, merging);
+                lens[k] = sample_lens(camera, sampler);
+            } else if let Some(start) = start_walk_on(scene, index, pick, sampler, merging) {
+                (walks[k], lens[k]) = (start.walk, sample_lens(camera, sampler));
                 if looks_further(&walks[k], max_depth) {
                     active |= 1 << k;
                 }
             }
+        }
+        if starts.staged() != 0 {
+            starts.start();
+            for_lanes(starts.staged(), |k| {
+                if let Some(walk) = starts.walk(k, merging) {
+                    walks[k] = walk;
+                    if looks_further(&walks[k], max_depth) {
+                        active |= 1 << k;
+                    }
+                }
+            });
         }
         let unused = Ray::new(Vec3::ZERO, Vec3::Z);
         let mut rays = [unused; LANES];

@@ -15,13 +15,14 @@
 
 use super::simd::{
     diffuse_eval, follow_weights, get3, lane_mask, load, load3, offset_origin, set3, set_bits,
-    shading_correction, store, store3, Continued, Lanes, Lanes3, StagedVertices, V3,
+    shading_correction, store, store3, Continued, Lanes, Lanes3, StagedLights, StagedVertices, V3,
 };
-use super::walk::Walk;
+use super::walk::{MergeWeights, Walk};
 use super::LIGHT_ROULETTE_START;
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::{Ray, SurfacePoint};
+use crate::light::AreaLight;
 use crate::sampling::VertexNumbers;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -306,5 +307,123 @@ impl DiffuseLightLanes {
             store(next_d_vc, &mut out.d_vc, base);
             store(next_d_vm, &mut out.d_vm, base);
         }
+    }
+}
+
+/// The light walks' starts on emissive triangles, made eight lanes at a
+/// time (`start_light_walk` with `AreaLight::sample_emission`): each lane
+/// stages its light, chosen with its numbers drawn, and one pass per half
+/// of the lanes samples the point and direction and begins the walk.
+#[derive(Default)]
+pub(super) struct LightStarts {
+    lights: StagedLights,
+    direction: [Lanes; 2],
+    vc: Lanes,
+    out: Started,
+}
+
+/// What the pass hands back, per lane.
+#[derive(Default)]
+struct Started {
+    /// Lanes whose light emits along the sampled direction.
+    some: u32,
+    origin: Lanes3,
+    dir: Lanes3,
+    throughput: Lanes3,
+    roulette_scale: Lanes,
+    d_vcm: Lanes,
+    d_vc: Lanes,
+    d_vm: Lanes,
+}
+
+impl LightStarts {
+    /// Forgets the previous batch's lanes.
+    pub fn clear(&mut self) {
+        self.lights.clear();
+    }
+
+    /// Lanes staged.
+    pub fn staged(&self) -> u32 {
+        self.lights.lit
+    }
+
+    /// Stages lane `lane`'s start on `light`, chosen with probability
+    /// `pick`, with the numbers of its point and direction, for a walk
+    /// with the merging constants `merging`.
+    #[inline(always)]
+    pub fn stage(
+        &mut self,
+        lane: usize,
+        light: &AreaLight,
+        pick: f32,
+        (u_point, u_direction): ((f32, f32), (f32, f32)),
+        merging: MergeWeights,
+    ) {
+        self.lights.stage(lane, light, pick, u_point);
+        self.direction[0][lane] = u_direction.0;
+        self.direction[1][lane] = u_direction.1;
+        self.vc[lane] = merging.vc;
+    }
+
+    /// Starts every staged lane.
+    pub fn start(&mut self) {
+        for base in [0, 8] {
+            if (self.lights.lit >> base) & 0xff != 0 {
+                self.start_half(base);
+            }
+        }
+    }
+
+    /// Lane `lane`'s walk as `start_light_walk` begins it, for merging
+    /// constants `merging`; `None` where its light emits nothing along the
+    /// sampled direction.
+    #[inline(always)]
+    pub fn walk(&self, lane: usize, merging: MergeWeights) -> Option<Walk> {
+        let out = &self.out;
+        (out.some >> lane & 1 != 0).then(|| Walk {
+            origin: get3(&out.origin, lane),
+            dir: get3(&out.dir, lane),
+            throughput: get3(&out.throughput, lane),
+            roulette_scale: out.roulette_scale[lane],
+            length: 1,
+            d_vcm: out.d_vcm[lane],
+            d_vc: out.d_vc[lane],
+            d_vm: out.d_vm[lane],
+            merging,
+            finite_start: true,
+            weighted: true,
+        })
+    }
+
+    /// The SIMD pass over lanes `base .. base + 8`.
+    fn start_half(&mut self, base: usize) {
+        let (zero, one) = (f32x8::ZERO, f32x8::ONE);
+        let mis = |x: f32x8| x * x;
+        let (u, v) = (
+            load(&self.direction[0], base),
+            load(&self.direction[1], base),
+        );
+        let e = self.lights.emission(base, u, v);
+        let emission_pdf = e.emission_pdf * e.pick;
+        let direct_pdf = e.direct_pdf_area * e.pick;
+        // An area light is finite and not a delta: the cosine counts.
+        let d_vc = mis(e.cos_light / emission_pdf);
+        let throughput = e.value.div(emission_pdf);
+        // `roulette_scale`.
+        let scale = one / throughput.max_element();
+        let usable = !(scale.is_nan() | scale.is_inf()) & scale.simd_gt(zero);
+        let out = &mut self.out;
+        set_bits(&mut out.some, e.some, base);
+        store3(
+            offset_origin(e.point, e.normal, e.dir, e.magnitude),
+            &mut out.origin,
+            base,
+        );
+        store3(e.dir, &mut out.dir, base);
+        store3(throughput, &mut out.throughput, base);
+        store(usable.select(scale, one), &mut out.roulette_scale, base);
+        store(mis(direct_pdf / emission_pdf), &mut out.d_vcm, base);
+        store(d_vc, &mut out.d_vc, base);
+        store(d_vc * load(&self.vc, base), &mut out.d_vm, base);
     }
 }

@@ -514,6 +514,67 @@ impl StagedLights {
     }
 }
 
+/// A point and a direction of emission chosen on each staged light
+/// (`AreaLight::sample_emission`), lane by lane.
+pub(super) struct Emission {
+    /// Lanes whose light emits along the sampled direction.
+    pub some: f32x8,
+    pub point: V3,
+    pub dir: V3,
+    /// The radiance times the cosine at the light.
+    pub value: V3,
+    /// The density of the direction and point (solid angle times area),
+    /// and of the point alone (area).
+    pub emission_pdf: f32x8,
+    pub direct_pdf_area: f32x8,
+    pub cos_light: f32x8,
+    /// The light's front normal (not turned to the sampled face).
+    pub normal: V3,
+    pub magnitude: f32x8,
+    pub pick: f32x8,
+}
+
+impl StagedLights {
+    /// The emission samples of lanes `base .. base + 8`, the staged
+    /// numbers choosing the point and `(u, v)` the direction.
+    #[inline(always)]
+    pub fn emission(&self, base: usize, u: f32x8, v: f32x8) -> Emission {
+        let (one, zero) = (f32x8::ONE, f32x8::ZERO);
+        let load = |a: &Lanes| load(a, base);
+        let load3 = |a: &Lanes3| load3(a, base);
+        let (pu, pv) = (load(&self.point[0]), load(&self.point[1]));
+        let fold = (pu + pv).simd_gt(one);
+        let b1 = fold.select(one - pu, pu);
+        let b2 = fold.select(one - pv, pv);
+        let [v0, v1, v2] = self.vertices.each_ref().map(load3);
+        let point = v0.scale(one - b1 - b2) + v1.scale(b1) + v2.scale(b2);
+        let normal = load3(&self.normal);
+        // A two-sided light reuses `u` to choose its face.
+        let two_sided = lane_mask(self.two_sided >> base);
+        let half = u.simd_lt(f32x8::splat(0.5));
+        let two = f32x8::splat(2.0);
+        let u = two_sided.select(half.select(u * two, two * u - one), u);
+        let back = two_sided & !half;
+        let face = V3::select(back, -normal, normal);
+        let local = cosine_hemisphere(u.min(f32x8::splat(1.0 - f32::EPSILON)), v);
+        let cos_light = local.z;
+        let area = load(&self.area);
+        let sides = two_sided.select(f32x8::splat(0.5), one);
+        Emission {
+            some: lane_mask(self.lit >> base) & !cos_light.simd_le(zero),
+            point,
+            dir: Frame::new(face).to_world(local),
+            value: load3(&self.radiance).scale(cos_light),
+            emission_pdf: sides * cos_light.abs() / f32x8::splat(PI) / area,
+            direct_pdf_area: one / area,
+            cos_light,
+            normal,
+            magnitude: load(&self.magnitude),
+            pick: load(&self.pick),
+        }
+    }
+}
+
 /// A Lambertian BSDF of reflectance `albedo` towards `wi`, lane by lane
 /// (`Bsdf::eval` and `Bsdf::pdf`): its value f cos, and the density of
 /// sampling `wi`; `n` is the shading normal and `ng` the geometric one,
@@ -687,6 +748,45 @@ mod tests {
     /// A deterministic spread of numbers in [0, 1).
     fn uniform(i: usize) -> f32 {
         ((i as u32).wrapping_mul(2_654_435_769) >> 8) as f32 / (1 << 24) as f32
+    }
+
+    #[test]
+    fn emission_samples_are_the_scalar_ones() {
+        use crate::geometry::Triangle;
+        let triangle = Triangle::new(
+            Vec3::new(-1.0, 3.0, 0.5),
+            Vec3::new(2.0, 3.5, -0.25),
+            Vec3::new(0.5, 2.0, 1.5),
+        );
+        let radiance = Vec3::new(4.0, 2.5, 1.0);
+        for two_sided in [false, true] {
+            let light = AreaLight::new(triangle, 0, radiance, two_sided);
+            for run in 0..50 {
+                let number = |k: usize, d: usize| uniform(64 * run + 8 * d + k);
+                let mut staged = StagedLights::default();
+                for k in 0..LANES {
+                    let k8 = k % 8;
+                    staged.stage(k, &light, 0.25, (number(k8, 0), number(k8, 1)));
+                }
+                let e = staged.emission(8, lanes(|k| number(k, 2)), lanes(|k| number(k, 3)));
+                for k in 0..8 {
+                    let u = (number(k, 0), number(k, 1));
+                    let scalar = light.sample_emission(u, (number(k, 2), number(k, 3)));
+                    let lane = |v: f32x8| v.to_array()[k];
+                    let lane3 = |v: V3| Vec3::new(lane(v.x), lane(v.y), lane(v.z));
+                    assert_eq!(lane(e.some) != 0.0, scalar.is_some());
+                    let Some(scalar) = scalar else { continue };
+                    assert_eq!(lane3(e.point), scalar.origin);
+                    assert_eq!(lane3(e.dir), scalar.dir);
+                    assert_eq!(lane3(e.value), scalar.value);
+                    assert_eq!(lane(e.emission_pdf), scalar.emission_pdf);
+                    assert_eq!(lane(e.direct_pdf_area), scalar.direct_pdf_area);
+                    assert_eq!(lane(e.cos_light), scalar.cos_light);
+                    assert_eq!(lane3(e.normal), scalar.normal);
+                    assert_eq!(lane(e.pick), 0.25);
+                }
+            }
+        }
     }
 
     #[test]

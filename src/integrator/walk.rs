@@ -224,6 +224,18 @@ pub fn start_light_walk(
     merging: MergeWeights,
 ) -> Option<LightStart> {
     let (index, pick) = scene.light_selector.sample(sampler.next_1d())?;
+    start_walk_on(scene, index, pick, sampler, merging)
+}
+
+/// The rest of `start_light_walk` once light `index` is chosen, with
+/// probability `pick`.
+pub fn start_walk_on(
+    scene: &Scene,
+    index: usize,
+    pick: f32,
+    sampler: &mut Sampler,
+    merging: MergeWeights,
+) -> Option<LightStart> {
     let light = &scene.lights[index];
     let u_pos = sampler.next_2d();
     let u_dir = sampler.next_2d();
