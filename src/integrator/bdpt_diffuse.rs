@@ -14,8 +14,8 @@
 use super::bdpt::{light_sample, Bidirectional, CameraVertex, Share};
 use super::bdpt_connect::ConnectionLanes;
 use super::simd::{
-    diffuse_eval, follow_weights, get3, load, set_bits, store, store3, Continued, Lanes, Lanes3,
-    StagedVertices,
+    diffuse_eval, follow_weights, get3, load, set_bits, store, store3, Continued, DiffuseVertices,
+    Lanes, Lanes3, StagedVertices, V3,
 };
 use super::walk::Walk;
 use super::ROULETTE_START;
@@ -103,12 +103,7 @@ impl Bidirectional {
 #[derive(Default)]
 pub(super) struct DiffuseCameraLanes {
     vertices: StagedVertices,
-    roulette_scale: Lanes,
-    d_vcm: Lanes,
-    d_vc: Lanes,
-    d_vm: Lanes,
-    vm: Lanes,
-    vc: Lanes,
+    walks: StagedWalks,
     /// Each lit lane's place in the step's list of shares, where its
     /// s = 1 share waits for the pass.
     slots: [usize; LANES],
@@ -127,11 +122,94 @@ struct Followed {
     ray_origin: Lanes3,
     ray_dir: Lanes3,
     ray_tmax: Lanes,
-    /// The walks' next throughputs and rays, and which go on.
+    next: FollowedWalks,
+}
+
+/// A BDPT walk's MIS quantities and roulette scale at its staged diffuse
+/// vertex, lane by lane: what both walks' passes read of it.
+#[derive(Default)]
+pub(super) struct StagedWalks {
+    roulette_scale: Lanes,
+    d_vcm: Lanes,
+    d_vc: Lanes,
+    d_vm: Lanes,
+    vm: Lanes,
+    vc: Lanes,
+}
+
+impl StagedWalks {
+    #[inline(always)]
+    pub fn stage(&mut self, lane: usize, walk: &Walk) {
+        self.roulette_scale[lane] = walk.roulette_scale;
+        self.d_vcm[lane] = walk.d_vcm;
+        self.d_vc[lane] = walk.d_vc;
+        self.d_vm[lane] = walk.d_vm;
+        self.vm[lane] = walk.merging.vm;
+        self.vc[lane] = walk.merging.vc;
+    }
+
+    /// Lanes `base .. base + 8`: `d_vcm`, `d_vc` and the merging constant
+    /// `vm`, which the strategies' weights at the vertex read.
+    #[inline(always)]
+    pub fn weights(&self, base: usize) -> (f32x8, f32x8, f32x8) {
+        (
+            load(&self.d_vcm, base),
+            load(&self.d_vc, base),
+            load(&self.vm, base),
+        )
+    }
+
+    /// `Walk::follow` for lanes `base .. base + 8` after the diffuse
+    /// bounce of `v`, whose sample has the weight `weight`, into `out`:
+    /// the MIS quantities, the throughput, the next ray and roulette.
+    #[inline(always)]
+    pub fn follow(&self, v: &DiffuseVertices, weight: V3, base: usize, out: &mut FollowedWalks) {
+        let (d_vcm, d_vc, vm) = self.weights(base);
+        let d_vm = load(&self.d_vm, base);
+        let (next_d_vcm, next_d_vc, next_d_vm) =
+            follow_weights(v, (d_vcm, d_vc, d_vm), (vm, load(&self.vc, base)));
+        out.next
+            .store(v, weight, load(&self.roulette_scale, base), base);
+        store(next_d_vcm, &mut out.d_vcm, base);
+        store(next_d_vc, &mut out.d_vc, base);
+        store(next_d_vm, &mut out.d_vm, base);
+    }
+}
+
+/// The walks after a staged diffuse vertex, lane by lane.
+#[derive(Default)]
+pub(super) struct FollowedWalks {
+    /// The next throughputs and rays, and which go on.
     next: Continued,
     d_vcm: Lanes,
     d_vc: Lanes,
     d_vm: Lanes,
+}
+
+impl FollowedWalks {
+    /// Follows lane `lane`'s walk as `Walk::follow` would, and counts the
+    /// vertex; returns whether the walk goes on.
+    #[inline(always)]
+    pub fn apply(&self, lane: usize, walk: &mut Walk) -> bool {
+        let bit = 1u32 << lane;
+        if self.next.sampled & bit == 0 {
+            return false;
+        }
+        walk.d_vcm = self.d_vcm[lane];
+        walk.d_vc = self.d_vc[lane];
+        walk.d_vm = self.d_vm[lane];
+        let (throughput, origin, dir) = self.next.get(lane);
+        walk.throughput = throughput;
+        // A diffuse bounce leaves the roulette scale as it is (it
+        // multiplies by eta² = 1).
+        walk.origin = origin;
+        walk.dir = dir;
+        if self.next.survives & bit == 0 {
+            return false;
+        }
+        walk.length += 1;
+        true
+    }
 }
 
 impl DiffuseCameraLanes {
@@ -171,12 +249,7 @@ impl DiffuseCameraLanes {
             roulette,
             roulette_on,
         );
-        self.roulette_scale[lane] = walk.roulette_scale;
-        self.d_vcm[lane] = walk.d_vcm;
-        self.d_vc[lane] = walk.d_vc;
-        self.d_vm[lane] = walk.d_vm;
-        self.vm[lane] = walk.merging.vm;
-        self.vc[lane] = walk.merging.vc;
+        self.walks.stage(lane, walk);
     }
 
     /// Stages lane `lane`'s light sample: `light`, chosen with probability
@@ -231,25 +304,7 @@ impl DiffuseCameraLanes {
     /// vertex as `camera_vertex` does; returns whether the walk goes on.
     #[inline(always)]
     pub fn follow(&self, lane: usize, walk: &mut Walk) -> bool {
-        let bit = 1u32 << lane;
-        let out = &self.out;
-        if out.next.sampled & bit == 0 {
-            return false;
-        }
-        walk.d_vcm = out.d_vcm[lane];
-        walk.d_vc = out.d_vc[lane];
-        walk.d_vm = out.d_vm[lane];
-        let (throughput, origin, dir) = out.next.get(lane);
-        walk.throughput = throughput;
-        // A diffuse bounce leaves the roulette scale as it is (it
-        // multiplies by eta² = 1).
-        walk.origin = origin;
-        walk.dir = dir;
-        if out.next.survives & bit == 0 {
-            return false;
-        }
-        walk.length += 1;
-        true
+        self.out.next.apply(lane, walk)
     }
 
     /// The SIMD pass over lanes `base .. base + 8`.
@@ -257,12 +312,7 @@ impl DiffuseCameraLanes {
         let (one, zero) = (f32x8::ONE, f32x8::ZERO);
         let mis = |x: f32x8| x * x;
         let v = self.vertices.vertices(base);
-        let (d_vcm, d_vc, d_vm) = (
-            load(&self.d_vcm, base),
-            load(&self.d_vc, base),
-            load(&self.d_vm, base),
-        );
-        let vm = load(&self.vm, base);
+        let (d_vcm, d_vc, vm) = self.walks.weights(base);
         // The density of sampling `wo` back from a reflected direction
         // (`Bsdf::pdfs`' reverse density, diffuse).
         let reverse_pdf = v.wo.dot(v.frame.n).max(zero) * f32x8::splat(FRAC_1_PI);
@@ -292,15 +342,7 @@ impl DiffuseCameraLanes {
             store(light.ray_tmax, &mut out.ray_tmax, base);
         }
 
-        // `Walk::follow`: the MIS quantities, the throughput (times the
-        // sample's weight, the reflectance), the next ray and roulette.
-        let (next_d_vcm, next_d_vc, next_d_vm) =
-            follow_weights(&v, (d_vcm, d_vc, d_vm), (vm, load(&self.vc, base)));
-        let out = &mut self.out;
-        out.next
-            .store(&v, v.albedo, load(&self.roulette_scale, base), base);
-        store(next_d_vcm, &mut out.d_vcm, base);
-        store(next_d_vc, &mut out.d_vc, base);
-        store(next_d_vm, &mut out.d_vm, base);
+        // `Walk::follow`, the sample's weight the reflectance.
+        self.walks.follow(&v, v.albedo, base, &mut self.out.next);
     }
 }

@@ -185,16 +185,8 @@ impl Bidirectional {
                     Material::Diffuse { albedo } if walk.weighted => {
                         let numbers =
                             light_goes_on(walk, max_depth).then(|| sampler.walk_numbers());
-                        vertices.push(LightVertex {
-                            surface,
-                            bsdf: material.bsdf(&surface, wo),
-                            wo,
-                            throughput: walk.throughput,
-                            length: walk.length,
-                            d_vcm: walk.d_vcm,
-                            d_vc: walk.d_vc,
-                            d_vm: walk.d_vm,
-                        });
+                        let bsdf = material.bsdf(&surface, wo);
+                        vertices.push(LightVertex::new(surface, bsdf, wo, walk));
                         let albedo = albedo.at(&surface);
                         diffuse.stage(k, &surface, wo, albedo, walk, lens[k], numbers);
                     }

@@ -13,9 +13,10 @@
 //! `camera_splat_weight`, `Walk::follow`) in its order, so each sample
 //! stays bit for bit what it is alone (`tests/it/determinism.rs`).
 
+use super::bdpt_diffuse::{FollowedWalks, StagedWalks};
 use super::simd::{
-    diffuse_eval, follow_weights, get3, lane_mask, load, load3, offset_origin, set3, set_bits,
-    shading_correction, store, store3, Continued, Lanes, Lanes3, StagedLights, StagedVertices, V3,
+    diffuse_eval, get3, lane_mask, load, load3, offset_origin, set3, set_bits, shading_correction,
+    store, store3, Lanes, Lanes3, StagedLights, StagedVertices, V3,
 };
 use super::walk::{MergeWeights, Walk};
 use super::LIGHT_ROULETTE_START;
@@ -34,12 +35,7 @@ pub(super) struct DiffuseLightLanes {
     vertices: StagedVertices,
     /// Each lane's lens point, which its splats aim at.
     lens: Lanes3,
-    roulette_scale: Lanes,
-    d_vcm: Lanes,
-    d_vc: Lanes,
-    d_vm: Lanes,
-    vm: Lanes,
-    vc: Lanes,
+    walks: StagedWalks,
     /// Lanes whose walks look for a further vertex (and drew its numbers).
     goes_on: u32,
     out: Splatted,
@@ -59,11 +55,7 @@ struct Splatted {
     ray_origin: Lanes3,
     ray_dir: Lanes3,
     ray_tmax: Lanes,
-    /// The walks' next throughputs and rays, and which go on.
-    next: Continued,
-    d_vcm: Lanes,
-    d_vc: Lanes,
-    d_vm: Lanes,
+    next: FollowedWalks,
 }
 
 /// What the pass reads of the camera: its frame, the projection's
@@ -179,12 +171,7 @@ impl DiffuseLightLanes {
             walk.length >= LIGHT_ROULETTE_START,
         );
         set3(&mut self.lens, lane, lens);
-        self.roulette_scale[lane] = walk.roulette_scale;
-        self.d_vcm[lane] = walk.d_vcm;
-        self.d_vc[lane] = walk.d_vc;
-        self.d_vm[lane] = walk.d_vm;
-        self.vm[lane] = walk.merging.vm;
-        self.vc[lane] = walk.merging.vc;
+        self.walks.stage(lane, walk);
     }
 
     /// Shades every staged lane.
@@ -217,22 +204,7 @@ impl DiffuseLightLanes {
     /// returns whether it goes on.
     #[inline(always)]
     pub fn follow(&self, lane: usize, walk: &mut Walk) -> bool {
-        let (bit, out) = (1u32 << lane, &self.out);
-        if self.goes_on & out.next.sampled & bit == 0 {
-            return false;
-        }
-        walk.d_vcm = out.d_vcm[lane];
-        walk.d_vc = out.d_vc[lane];
-        walk.d_vm = out.d_vm[lane];
-        let (throughput, origin, dir) = out.next.get(lane);
-        walk.throughput = throughput;
-        walk.origin = origin;
-        walk.dir = dir;
-        if out.next.survives & bit == 0 {
-            return false;
-        }
-        walk.length += 1;
-        true
+        self.goes_on >> lane & 1 != 0 && self.out.next.apply(lane, walk)
     }
 
     /// The SIMD pass over lanes `base .. base + 8`.
@@ -240,12 +212,7 @@ impl DiffuseLightLanes {
         let (zero, one) = (f32x8::ZERO, f32x8::ONE);
         let mis = |x: f32x8| x * x;
         let v = self.vertices.vertices(base);
-        let (d_vcm, d_vc, d_vm) = (
-            load(&self.d_vcm, base),
-            load(&self.d_vc, base),
-            load(&self.d_vm, base),
-        );
-        let vm = load(&self.vm, base);
+        let (d_vcm, d_vc, vm) = self.walks.weights(base);
 
         // t = 1 (`camera_splat_unshadowed`): `CameraConnection::new` ...
         let lens = load3(&self.lens, base);
@@ -296,16 +263,10 @@ impl DiffuseLightLanes {
         // times the sample's weight (the reflectance times the shading
         // correction), the next ray and roulette.
         if (self.goes_on >> base) & 0xff != 0 {
-            let (next_d_vcm, next_d_vc, next_d_vm) =
-                follow_weights(&v, (d_vcm, d_vc, d_vm), (vm, load(&self.vc, base)));
             let weight = v
                 .albedo
                 .scale(shading_correction(v.wo, v.wi, v.frame.n, v.ng));
-            out.next
-                .store(&v, weight, load(&self.roulette_scale, base), base);
-            store(next_d_vcm, &mut out.d_vcm, base);
-            store(next_d_vc, &mut out.d_vc, base);
-            store(next_d_vm, &mut out.d_vm, base);
+            self.walks.follow(&v, weight, base, &mut out.next);
         }
     }
 }

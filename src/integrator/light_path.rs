@@ -116,16 +116,7 @@ pub fn light_scatter(
     let sampled = numbers.and_then(|n| bsdf.sample(wo, n.direction, n.lobe, Transport::Importance));
 
     if !bsdf.is_delta() {
-        visit(&LightVertex {
-            surface,
-            bsdf,
-            wo,
-            throughput: walk.throughput,
-            length: walk.length,
-            d_vcm: walk.d_vcm,
-            d_vc: walk.d_vc,
-            d_vm: walk.d_vm,
-        });
+        visit(&LightVertex::new(surface, bsdf, wo, walk));
     }
     let Some(numbers) = numbers else {
         return false;

@@ -70,6 +70,24 @@ pub struct LightVertex {
     pub d_vm: f32,
 }
 
+impl LightVertex {
+    /// The vertex of the light walk `walk` (arrived, not yet followed) at
+    /// `surface`, with its BSDF and the direction `wo` back along the walk.
+    #[inline(always)]
+    pub fn new(surface: SurfacePoint, bsdf: Bsdf, wo: Vec3, walk: &Walk) -> LightVertex {
+        LightVertex {
+            surface,
+            bsdf,
+            wo,
+            throughput: walk.throughput,
+            length: walk.length,
+            d_vcm: walk.d_vcm,
+            d_vc: walk.d_vc,
+            d_vm: walk.d_vm,
+        }
+    }
+}
+
 /// The two constants by which vertex merging enters the MIS quantities,
 /// from η = π r² N (merging radius r, N light paths per iteration): the
 /// report's η_VCM and its inverse, through the power heuristic.
