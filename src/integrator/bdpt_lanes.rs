@@ -32,7 +32,9 @@ use super::light_path::{
 };
 use super::sink::SampleSink;
 use super::vcm::{LightPass, VertexMerging};
-use super::walk::{light_paths_per_pass, start_walk_on, LightVertex, MergeWeights, Walk};
+use super::walk::{
+    emission_numbers, light_paths_per_pass, start_walk_on, LightVertex, MergeWeights, Walk,
+};
 use super::PixelSample;
 use crate::bvh::{for_lanes, Hit, LANES};
 use crate::camera::Camera;
@@ -123,8 +125,12 @@ impl Bidirectional {
         let mut walks = [IDLE; LANES];
         let mut lens = [Vec3::ZERO; LANES];
         let mut active = 0u32;
-        // `begin_light_path`, a start on an emissive triangle staged for
-        // the SIMD pass (see `bdpt_light_diffuse.rs`).
+        // `begin_light_path`, its draws in its order, a start on an
+        // emissive triangle staged for the SIMD pass (see
+        // `bdpt_light_diffuse.rs`). Such a lane draws its lens point even
+        // where the pass then finds no emission, which `begin_light_path`
+        // would not: the sampler is the light walk's alone, and that walk
+        // ends there, so nothing else reads it.
         let merging = MergeWeights::NONE;
         let starts = &mut state.light_starts;
         starts.clear();
@@ -136,7 +142,7 @@ impl Bidirectional {
                 continue;
             };
             if let Light::Area(light) = &scene.lights[index] {
-                let numbers = (sampler.next_2d(), sampler.next_2d());
+                let numbers = emission_numbers(sampler);
                 starts.stage(k, light, pick, numbers, merging);
                 lens[k] = sample_lens(camera, sampler);
             } else if let Some(start) = start_walk_on(scene, index, pick, sampler, merging) {

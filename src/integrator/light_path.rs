@@ -16,8 +16,9 @@ use glam::Vec3;
 /// The start of a light path: its numbers from a fresh group, a light and
 /// the walk's first point and direction on it, then the lens point its
 /// connections to the camera aim at (drawn only by a thin lens). Light
-/// tracing, BDPT and BDPT's lanes all begin here, so their paths draw the
-/// same numbers in the same order. `None` when no light can start one.
+/// tracing and BDPT begin here, and BDPT's lanes make the same draws in
+/// the same order (`bdpt_lanes.rs`, through `emission_numbers`), so their
+/// paths agree. `None` when no light can start one.
 #[inline(always)]
 pub fn begin_light_path(
     scene: &Scene,

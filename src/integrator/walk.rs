@@ -245,6 +245,15 @@ pub fn start_light_walk(
     start_walk_on(scene, index, pick, sampler, merging)
 }
 
+/// The numbers of a light walk's start once its light is chosen: its
+/// point's, then its direction's. BDPT's lanes draw them here too, so
+/// that a start staged for SIMD draws what `start_walk_on` would.
+#[inline(always)]
+pub fn emission_numbers(sampler: &mut Sampler) -> ((f32, f32), (f32, f32)) {
+    let u_point = sampler.next_2d();
+    (u_point, sampler.next_2d())
+}
+
 /// The rest of `start_light_walk` once light `index` is chosen, with
 /// probability `pick`.
 pub fn start_walk_on(
@@ -255,8 +264,7 @@ pub fn start_walk_on(
     merging: MergeWeights,
 ) -> Option<LightStart> {
     let light = &scene.lights[index];
-    let u_pos = sampler.next_2d();
-    let u_dir = sampler.next_2d();
+    let (u_pos, u_dir) = emission_numbers(sampler);
     let e = light.sample_emission(u_pos, u_dir)?;
     let emission_pdf = e.emission_pdf * pick;
     let direct_pdf = e.direct_pdf_area * pick;
