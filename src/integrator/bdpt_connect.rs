@@ -16,6 +16,7 @@ use super::bdpt::{connect_vertices, Bidirectional, Share};
 use super::bdpt_diffuse::Shares;
 use super::simd::{diffuse_eval, offset_origin, shading_correction, V3};
 use super::walk::{LightVertex, Walk};
+use crate::bvh::LANES;
 use crate::color::Rgb;
 use crate::geometry::{Ray, SurfacePoint};
 use crate::material::Bsdf;
@@ -28,54 +29,33 @@ type Block = [f32; 8];
 /// Eight vectors, as three blocks of coordinates.
 type Block3 = [Block; 3];
 
-/// One end of a connection, as staged: a Lambertian vertex.
+/// A Lambertian vertex packed as one end of a connection: three rows of
+/// eight numbers, which the pass loads for eight pairs at once and
+/// transposes into lanes (`f32x8::transpose`). Each camera vertex and each
+/// light vertex is packed once, however many pairs it ends, and staging a
+/// pair copies its two ends whole: writing them into the pass's lanes one
+/// number at a time cost about three instructions a number.
 #[derive(Clone, Copy, Default)]
-struct Ends {
-    position: Block3,
-    /// The geometric normal as the surface gives it, for the ray's offset.
-    normal: Block3,
-    magnitude: Block,
-    /// The shading and geometric normals on the side of the vertex's `wo`.
-    shading: Block3,
-    facing: Block3,
-    albedo: Block3,
-    /// The walk's part of the other end's weight: vm + d_vcm + d_vc
-    /// mis(reverse density of `wo`) (eq. 45).
-    mis_factor: Block,
-    throughput: Block3,
-}
+#[repr(C, align(32))]
+struct End([f32; 24]);
 
-/// Eight staged pairs and what the pass makes of them.
-#[derive(Clone, Copy, Default)]
-struct PairBlock {
-    camera: Ends,
-    light: Ends,
-    /// The light vertex's `wo`, for the shading correction.
-    light_wo: Block3,
-    /// The share's value (throughputs times estimate) and weight.
-    value: Block3,
-    weight: Block,
-    /// Pairs with a shadow ray, and the rays.
-    has_ray: u32,
-    ray_origin: Block3,
-    ray_dir: Block3,
-    ray_tmax: Block,
-}
+// Where each quantity sits in an `End`.
+const POSITION: usize = 0;
+/// The geometric normal as the surface gives it, for the ray's offset.
+const NORMAL: usize = 3;
+const MAGNITUDE: usize = 6;
+/// The walk's part of the other end's weight: vm + d_vcm + d_vc
+/// mis(reverse density of `wo`) (eq. 45).
+const MIS_FACTOR: usize = 7;
+/// The shading and geometric normals on the side of the vertex's `wo`.
+const SHADING: usize = 8;
+const FACING: usize = 11;
+const ALBEDO: usize = 14;
+const THROUGHPUT: usize = 17;
+/// The vertex's `wo`, which the light end's shading correction reads.
+const WO: usize = 20;
 
-/// A Lambertian vertex, ready to stage as either end of a pair.
-pub(super) struct DiffuseEnd {
-    position: Vec3,
-    normal: Vec3,
-    magnitude: f32,
-    shading: Vec3,
-    facing: Vec3,
-    albedo: Rgb,
-    mis_factor: f32,
-    throughput: Rgb,
-    wo: Vec3,
-}
-
-impl DiffuseEnd {
+impl End {
     /// The vertex at `surface` with the Lambertian `bsdf` (`None` for any
     /// other), seen along `wo`, on a walk with these MIS quantities,
     /// merging constant `vm` and throughput.
@@ -86,53 +66,132 @@ impl DiffuseEnd {
         wo: Vec3,
         (vm, d_vcm, d_vc): (f32, f32, f32),
         throughput: Rgb,
-    ) -> Option<DiffuseEnd> {
+    ) -> Option<End> {
         let mis = |x: f32| x * x;
         let (albedo, shading, facing) = bsdf.lambertian()?;
         // `Bsdf::eval_pdfs`' reverse density, which is all that it reads
         // of `wo` for a Lambertian lobe.
         let reverse_pdf = cosine_hemisphere_pdf(wo.dot(shading));
-        Some(DiffuseEnd {
-            position: surface.position,
-            normal: surface.geometric_normal,
-            magnitude: surface.magnitude,
-            shading,
-            facing,
-            albedo,
-            mis_factor: vm + d_vcm + d_vc * mis(reverse_pdf),
-            throughput,
-            wo,
-        })
+        let mut end = End::default();
+        let mut put = |at: usize, v: Vec3| end.0[at..at + 3].copy_from_slice(&v.to_array());
+        put(POSITION, surface.position);
+        put(NORMAL, surface.geometric_normal);
+        put(SHADING, shading);
+        put(FACING, facing);
+        put(ALBEDO, albedo);
+        put(THROUGHPUT, throughput);
+        put(WO, wo);
+        end.0[MAGNITUDE] = surface.magnitude;
+        end.0[MIS_FACTOR] = vm + d_vcm + d_vc * mis(reverse_pdf);
+        Some(end)
     }
 }
 
-impl Ends {
+/// Eight ends in lanes: `lanes[i]` is quantity `i` of each end.
+struct EndLanes {
+    lanes: [f32x8; 24],
+}
+
+impl EndLanes {
+    /// The ends of eight pairs, one per lane.
     #[inline(always)]
-    fn set(&mut self, lane: usize, end: &DiffuseEnd) {
-        let set3 = |a: &mut Block3, v: Vec3| {
-            a[0][lane] = v.x;
-            a[1][lane] = v.y;
-            a[2][lane] = v.z;
+    fn new(ends: &[End; 8]) -> EndLanes {
+        let row = |i: usize, part: usize| {
+            let numbers: &[f32; 8] = ends[i].0[part * 8..part * 8 + 8].try_into().unwrap();
+            f32x8::new(*numbers)
         };
-        set3(&mut self.position, end.position);
-        set3(&mut self.normal, end.normal);
-        self.magnitude[lane] = end.magnitude;
-        set3(&mut self.shading, end.shading);
-        set3(&mut self.facing, end.facing);
-        set3(&mut self.albedo, end.albedo);
-        self.mis_factor[lane] = end.mis_factor;
-        set3(&mut self.throughput, end.throughput);
+        let columns = |part: usize| f32x8::transpose(std::array::from_fn(|i| row(i, part)));
+        let [a, b, c] = [0, 1, 2].map(columns);
+        let mut lanes = [f32x8::ZERO; 24];
+        lanes[..8].copy_from_slice(&a);
+        lanes[8..16].copy_from_slice(&b);
+        lanes[16..].copy_from_slice(&c);
+        EndLanes { lanes }
     }
+
+    #[inline(always)]
+    fn get(&self, at: usize) -> f32x8 {
+        self.lanes[at]
+    }
+
+    #[inline(always)]
+    fn get3(&self, at: usize) -> V3 {
+        V3 {
+            x: self.lanes[at],
+            y: self.lanes[at + 1],
+            z: self.lanes[at + 2],
+        }
+    }
+}
+
+/// Eight staged pairs.
+#[derive(Clone, Copy, Default)]
+struct PairEnds {
+    camera: [End; 8],
+    light: [End; 8],
+}
+
+/// What the pass makes of eight pairs.
+#[derive(Default)]
+struct PairBlock {
+    /// The share's value (throughputs times estimate) and weight.
+    value: Block3,
+    weight: Block,
+    /// Pairs with a shadow ray, and the rays.
+    has_ray: u32,
+    ray_origin: Block3,
+    ray_dir: Block3,
+    ray_tmax: Block,
 }
 
 /// The pairs staged in a step, and their places in its list of shares.
 #[derive(Default)]
 pub(super) struct ConnectionLanes {
-    blocks: Vec<PairBlock>,
+    /// Each lane's light vertices as ends (`NOT_LAMBERTIAN` where one is
+    /// not): lane k's vertex i is `light_ends[light_first[k] + i]`, an
+    /// index into `lights`.
+    lights: Vec<End>,
+    light_ends: Vec<u32>,
+    light_first: [usize; LANES],
+    /// The merging constant the light ends were made with.
+    vm: f32,
+    /// The step's staged pairs, and their places in its list of shares.
+    blocks: Vec<PairEnds>,
     slots: Vec<usize>,
 }
 
+/// A light vertex that is no end of a staged pair.
+const NOT_LAMBERTIAN: u32 = u32::MAX;
+
 impl ConnectionLanes {
+    /// Packs the light vertices of lanes `0..lanes` (`vertices(k)` for
+    /// lane k) as ends, for camera walks of merging constant `vm`: once
+    /// per sample, where each is connected to every camera vertex.
+    pub fn begin<'a>(
+        &mut self,
+        lanes: usize,
+        vertices: impl Fn(usize) -> &'a [LightVertex],
+        vm: f32,
+    ) {
+        self.lights.clear();
+        self.light_ends.clear();
+        self.vm = vm;
+        for k in 0..lanes {
+            self.light_first[k] = self.light_ends.len();
+            for v in vertices(k) {
+                let weights = (vm, v.d_vcm, v.d_vc);
+                let index = match End::new(&v.surface, &v.bsdf, v.wo, weights, v.throughput) {
+                    Some(end) => {
+                        self.lights.push(end);
+                        self.lights.len() as u32 - 1
+                    }
+                    None => NOT_LAMBERTIAN,
+                };
+                self.light_ends.push(index);
+            }
+        }
+    }
+
     /// Forgets the previous step's pairs, and makes room for `most` new
     /// ones: staging then never grows the blocks, a test that would
     /// otherwise stand in every pair's way.
@@ -140,40 +199,41 @@ impl ConnectionLanes {
         self.slots.clear();
         let blocks = most.div_ceil(8);
         if self.blocks.len() < blocks {
-            self.blocks.resize(blocks, PairBlock::default());
+            self.blocks.resize(blocks, PairEnds::default());
         }
     }
 
     /// Evaluates every staged pair and fills its place in `connections`.
     pub fn connect(&mut self, connections: &mut [(usize, Option<Ray>, Share)]) {
-        let count = self.slots.len();
-        for block in &mut self.blocks[..count.div_ceil(8)] {
-            connect_block(block);
-        }
-        for (pair, &slot) in self.slots.iter().enumerate() {
-            let (block, lane) = (&self.blocks[pair / 8], pair % 8);
-            let get3 = |a: &Block3| Vec3::new(a[0][lane], a[1][lane], a[2][lane]);
-            let (_, ray, share) = &mut connections[slot];
-            share.set_estimate(get3(&block.value), block.weight[lane]);
-            *ray = (block.has_ray >> lane & 1 != 0).then(|| {
-                Ray::segment(
-                    get3(&block.ray_origin),
-                    get3(&block.ray_dir),
-                    block.ray_tmax[lane],
-                )
-            });
+        // A short last block computes its spare lanes from what they held
+        // before, and nothing reads them.
+        for (ends, slots) in self.blocks.iter().zip(self.slots.chunks(8)) {
+            let camera = EndLanes::new(&ends.camera);
+            let light = EndLanes::new(&ends.light);
+            let block = connect_block(&camera, &light);
+            for (lane, &slot) in slots.iter().enumerate() {
+                let get3 = |a: &Block3| Vec3::new(a[0][lane], a[1][lane], a[2][lane]);
+                let (_, ray, share) = &mut connections[slot];
+                share.set_estimate(get3(&block.value), block.weight[lane]);
+                *ray = (block.has_ray >> lane & 1 != 0).then(|| {
+                    Ray::segment(
+                        get3(&block.ray_origin),
+                        get3(&block.ray_dir),
+                        block.ray_tmax[lane],
+                    )
+                });
+            }
         }
     }
+}
 
+impl ConnectionLanes {
     #[inline(always)]
-    fn stage(&mut self, camera: &DiffuseEnd, light: &DiffuseEnd, slot: usize) {
+    fn stage(&mut self, camera: &End, light_index: u32, slot: usize) {
         let pair = self.slots.len();
-        let (block, lane) = (&mut self.blocks[pair / 8], pair % 8);
-        block.camera.set(lane, camera);
-        block.light.set(lane, light);
-        for (axis, c) in light.wo.to_array().into_iter().enumerate() {
-            block.light_wo[axis][lane] = c;
-        }
+        let block = &mut self.blocks[pair / 8];
+        block.camera[pair % 8] = *camera;
+        block.light[pair % 8] = self.lights[light_index as usize];
         self.slots.push(slot);
     }
 }
@@ -183,7 +243,8 @@ impl Bidirectional {
     /// the Lambertian `bsdf`, seen along `wo`: as `connect_light_vertices`
     /// (without merges), each connection's share in `connections` in the
     /// same order, those to Lambertian light vertices staged in `pairs`
-    /// with their places taken.
+    /// with their places taken. `light_vertices` are the lane's, whose
+    /// ends `pairs.begin` packed.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(super) fn connect_diffuse(
@@ -198,26 +259,22 @@ impl Bidirectional {
         pairs: &mut ConnectionLanes,
     ) {
         let vm = walk.merging.vm;
-        let camera = DiffuseEnd::new(
+        debug_assert_eq!(vm.to_bits(), pairs.vm.to_bits(), "light ends of another vm");
+        let camera = End::new(
             surface,
             bsdf,
             wo,
             (vm, walk.d_vcm, walk.d_vc),
             walk.throughput,
         );
-        for v in light_vertices {
+        let first = pairs.light_first[lane];
+        for (i, v) in light_vertices.iter().enumerate() {
             if v.length + 1 + walk.length > self.max_depth {
                 break;
             }
-            let light = camera.as_ref().and_then(|camera| {
-                let weights = (vm, v.d_vcm, v.d_vc);
-                Some((
-                    camera,
-                    DiffuseEnd::new(&v.surface, &v.bsdf, v.wo, weights, v.throughput)?,
-                ))
-            });
-            if let Some((camera, light)) = light {
-                pairs.stage(camera, &light, connections.len());
+            let light_index = pairs.light_ends[first + i];
+            if let (Some(camera), true) = (&camera, light_index != NOT_LAMBERTIAN) {
+                pairs.stage(camera, light_index, connections.len());
                 let waiting = Share::connection(walk, v, Rgb::ZERO, 0.0);
                 connections.push((lane, None, waiting));
             } else {
@@ -228,47 +285,35 @@ impl Bidirectional {
     }
 }
 
-/// `connect_vertices` and `Share::connection` for the eight pairs of
-/// `block`, Lambertian at both ends.
+/// `connect_vertices` and `Share::connection` for eight pairs, Lambertian
+/// at both ends.
 #[inline(always)]
-fn connect_block(block: &mut PairBlock) {
+fn connect_block(camera: &EndLanes, light: &EndLanes) -> PairBlock {
     let (zero, one) = (f32x8::ZERO, f32x8::ONE);
     let mis = |x: f32x8| x * x;
-    let load = |a: &Block| f32x8::new(*a);
-    let load3 = |a: &Block3| V3 {
-        x: load(&a[0]),
-        y: load(&a[1]),
-        z: load(&a[2]),
-    };
-    let (camera, light) = (&block.camera, &block.light);
-    let camera_normal = load3(&camera.normal);
-    let light_normal = load3(&light.normal);
+    let camera_normal = camera.get3(NORMAL);
+    let light_normal = light.get3(NORMAL);
 
-    let to_light = load3(&light.position) - load3(&camera.position);
+    let to_light = light.get3(POSITION) - camera.get3(POSITION);
     let distance2 = to_light.dot(to_light);
     let distance = distance2.sqrt();
     let dir = to_light.div(distance);
     let (camera_f, camera_pdf) = diffuse_eval(
-        load3(&camera.albedo),
-        load3(&camera.shading),
-        load3(&camera.facing),
+        camera.get3(ALBEDO),
+        camera.get3(SHADING),
+        camera.get3(FACING),
         dir,
     );
     // The light end, for importance: its value times the shading
     // correction (`Bsdf::eval_pdfs`), where its lobe takes `-dir`.
     let back = -dir;
-    let (shading, facing) = (load3(&light.shading), load3(&light.facing));
-    let (light_value, light_pdf) = diffuse_eval(load3(&light.albedo), shading, facing, back);
+    let (shading, facing) = (light.get3(SHADING), light.get3(FACING));
+    let (light_value, light_pdf) = diffuse_eval(light.get3(ALBEDO), shading, facing, back);
     let reflected = back.dot(facing).simd_gt(zero);
     let lobe = reflected & !(back.dot(shading).simd_gt(zero) ^ reflected);
     let light_f = V3::select(
         lobe,
-        light_value.scale(shading_correction(
-            load3(&block.light_wo),
-            back,
-            shading,
-            facing,
-        )),
+        light_value.scale(shading_correction(light.get3(WO), back, shading, facing)),
         V3::zero(),
     );
 
@@ -276,8 +321,8 @@ fn connect_block(block: &mut PairBlock) {
     let cos_light = dir.dot(light_normal).abs();
     let camera_pdf_area = camera_pdf * cos_light / distance2;
     let light_pdf_area = light_pdf * cos_camera / distance2;
-    let w_light = mis(camera_pdf_area) * load(&light.mis_factor);
-    let w_camera = mis(light_pdf_area) * load(&camera.mis_factor);
+    let w_light = mis(camera_pdf_area) * light.get(MIS_FACTOR);
+    let w_camera = mis(light_pdf_area) * camera.get(MIS_FACTOR);
     let weight = one / (w_light + one + w_camera);
     let contribution = (camera_f * light_f).div(distance2);
     let some = !distance2.simd_le(zero)
@@ -287,35 +332,32 @@ fn connect_block(block: &mut PairBlock) {
 
     // `segment_ray`: each end moved off its surface.
     let origin = offset_origin(
-        load3(&camera.position),
+        camera.get3(POSITION),
         camera_normal,
         to_light,
-        load(&camera.magnitude),
+        camera.get(MAGNITUDE),
     );
     let target = offset_origin(
-        load3(&light.position),
+        light.get3(POSITION),
         light_normal,
         -to_light,
-        load(&light.magnitude),
+        light.get(MAGNITUDE),
     );
     let to_target = target - origin;
     let length = to_target.dot(to_target).sqrt();
     let has_ray = some & !(length.is_nan() | length.simd_le(zero));
 
-    let throughput = load3(&camera.throughput) * load3(&light.throughput);
+    let throughput = camera.get3(THROUGHPUT) * light.get3(THROUGHPUT);
     let value = throughput * V3::select(some, contribution, V3::zero());
-    let store = |v: f32x8, a: &mut Block| *a = v.to_array();
-    let store3 = |v: V3, a: &mut Block3| {
-        store(v.x, &mut a[0]);
-        store(v.y, &mut a[1]);
-        store(v.z, &mut a[2]);
-    };
-    store3(value, &mut block.value);
-    store(some.select(weight, zero), &mut block.weight);
-    block.has_ray = has_ray.to_bitmask();
-    store3(origin, &mut block.ray_origin);
-    store3(to_target.div(length), &mut block.ray_dir);
-    store(length, &mut block.ray_tmax);
+    let three = |v: V3| [v.x, v.y, v.z].map(|c| c.to_array());
+    PairBlock {
+        value: three(value),
+        weight: some.select(weight, zero).to_array(),
+        has_ray: has_ray.to_bitmask(),
+        ray_origin: three(origin),
+        ray_dir: three(to_target.div(length)),
+        ray_tmax: length.to_array(),
+    }
 }
 
 #[cfg(test)]
@@ -378,6 +420,7 @@ mod tests {
         }
         let (mut connections, mut expected) = (Vec::new(), Vec::new());
         let mut pairs = ConnectionLanes::default();
+        pairs.begin(5, |k| &light_vertices[7 * k..], MergeWeights::NONE.vm);
         pairs.clear(5 * light_vertices.len());
         for i in 0..5 {
             let (surface, wo) = vertex(i);

@@ -285,6 +285,9 @@ impl Bidirectional {
                 active |= 1 << k;
             }
         }
+        if !MERGE {
+            pairs.begin(samples.len(), &vertices, merging.vm);
+        }
         // Strategies are not recorded here: a sink that keeps none.
         let mut no_records = SampleSink::default();
         let unused = Ray::new(Vec3::ZERO, Vec3::Z);
