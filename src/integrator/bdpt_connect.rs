@@ -56,19 +56,19 @@ const THROUGHPUT: usize = 17;
 const WO: usize = 20;
 
 impl End {
-    /// The vertex at `surface` with the Lambertian `bsdf` (`None` for any
-    /// other), seen along `wo`, on a walk with these MIS quantities,
-    /// merging constant `vm` and throughput.
+    /// The vertex at `surface` with a Lambertian BSDF (its reflectance
+    /// and its shading and geometric normals on the side of `wo`, see
+    /// `Bsdf::lambertian`), seen along `wo`, on a walk with these MIS
+    /// quantities, merging constant `vm` and throughput.
     #[inline(always)]
     fn new(
         surface: &SurfacePoint,
-        bsdf: &Bsdf,
+        (albedo, shading, facing): (Rgb, Vec3, Vec3),
         wo: Vec3,
         (vm, d_vcm, d_vc): (f32, f32, f32),
         throughput: Rgb,
-    ) -> Option<End> {
+    ) -> End {
         let mis = |x: f32| x * x;
-        let (albedo, shading, facing) = bsdf.lambertian()?;
         // `Bsdf::eval_pdfs`' reverse density, which is all that it reads
         // of `wo` for a Lambertian lobe.
         let reverse_pdf = cosine_hemisphere_pdf(wo.dot(shading));
@@ -83,7 +83,7 @@ impl End {
         put(WO, wo);
         end.0[MAGNITUDE] = surface.magnitude;
         end.0[MIS_FACTOR] = vm + d_vcm + d_vc * mis(reverse_pdf);
-        Some(end)
+        end
     }
 }
 
@@ -180,8 +180,9 @@ impl ConnectionLanes {
             self.light_first[k] = self.light_ends.len();
             for v in vertices(k) {
                 let weights = (vm, v.d_vcm, v.d_vc);
-                let index = match End::new(&v.surface, &v.bsdf, v.wo, weights, v.throughput) {
-                    Some(end) => {
+                let index = match v.bsdf.lambertian() {
+                    Some(lobe) => {
+                        let end = End::new(&v.surface, lobe, v.wo, weights, v.throughput);
                         self.lights.push(end);
                         self.lights.len() as u32 - 1
                     }
@@ -239,8 +240,9 @@ impl ConnectionLanes {
 }
 
 impl Bidirectional {
-    /// s > 1 at lane `lane`'s camera vertex on `walk`, at `surface` with
-    /// the Lambertian `bsdf`, seen along `wo`: as `connect_light_vertices`
+    /// s > 1 at lane `lane`'s camera vertex on `walk`, at `surface` with a
+    /// Lambertian BSDF (`lobe`, as `Bsdf::lambertian` gives it, and `bsdf`
+    /// to make it whole), seen along `wo`: as `connect_light_vertices`
     /// (without merges), each connection's share in `connections` in the
     /// same order, those to Lambertian light vertices staged in `pairs`
     /// with their places taken. `light_vertices` are the lane's, whose
@@ -251,8 +253,7 @@ impl Bidirectional {
         &self,
         lane: usize,
         walk: &Walk,
-        surface: &SurfacePoint,
-        bsdf: &Bsdf,
+        (surface, lobe, bsdf): (&SurfacePoint, (Rgb, Vec3, Vec3), impl Fn() -> Bsdf),
         wo: Vec3,
         light_vertices: &[LightVertex],
         connections: &mut Shares,
@@ -262,7 +263,7 @@ impl Bidirectional {
         debug_assert_eq!(vm.to_bits(), pairs.vm.to_bits(), "light ends of another vm");
         let camera = End::new(
             surface,
-            bsdf,
+            lobe,
             wo,
             (vm, walk.d_vcm, walk.d_vc),
             walk.throughput,
@@ -273,12 +274,12 @@ impl Bidirectional {
                 break;
             }
             let light_index = pairs.light_ends[first + i];
-            if let (Some(camera), true) = (&camera, light_index != NOT_LAMBERTIAN) {
-                pairs.stage(camera, light_index, connections.len());
+            if light_index != NOT_LAMBERTIAN {
+                pairs.stage(&camera, light_index, connections.len());
                 let waiting = Share::connection(walk, v, Rgb::ZERO, 0.0);
                 connections.push((lane, None, waiting));
             } else {
-                let (l, weight, ray) = connect_vertices(surface, bsdf, wo, walk, v);
+                let (l, weight, ray) = connect_vertices(surface, &bsdf(), wo, walk, v);
                 connections.push((lane, ray, Share::connection(walk, v, l, weight)));
             }
         }
@@ -407,8 +408,19 @@ mod tests {
         let mut light_vertices = Vec::new();
         for i in 0..37 {
             let (surface, wo) = vertex(1000 + i);
+            // Every fifth a rough metal, which the scalar code connects.
+            let light_material = if i % 5 == 4 {
+                Material::Conductor {
+                    alpha: 0.3,
+                    eta: Rgb::new(0.2, 0.9, 1.1),
+                    k: Rgb::new(3.9, 2.4, 2.2),
+                    reflectance: Rgb::ONE,
+                }
+            } else {
+                material(i)
+            };
             light_vertices.push(LightVertex {
-                bsdf: material(i).bsdf(&surface, wo),
+                bsdf: light_material.bsdf(&surface, wo),
                 surface,
                 wo,
                 throughput: Rgb::new(2.0, 0.5, uniform(i)),
@@ -439,11 +451,11 @@ mod tests {
                 weighted: true,
             };
             let lights = &light_vertices[7 * i..];
+            let lobe = bsdf.lambertian().expect("a Lambertian camera vertex");
             bdpt.connect_diffuse(
                 i,
                 &walk,
-                &surface,
-                &bsdf,
+                (&surface, lobe, || bsdf),
                 wo,
                 lights,
                 &mut connections,

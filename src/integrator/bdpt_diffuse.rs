@@ -23,7 +23,7 @@ use crate::bvh::LANES;
 use crate::color::Rgb;
 use crate::geometry::{Ray, SurfacePoint};
 use crate::light::{AreaLight, Light};
-use crate::material::Albedo;
+use crate::material::{facing_normals, Albedo, Bsdf};
 use crate::sampling::Sampler;
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -34,8 +34,8 @@ use wide::f32x8;
 pub(super) type Shares = Vec<(usize, Option<Ray>, Share)>;
 
 impl Bidirectional {
-    /// Lane `lane`'s camera vertex on `walk` at a Lambertian surface (its
-    /// surface, `wo` and material, of reflectance `albedo`), as
+    /// Lane `lane`'s camera vertex on `walk` at `surface`, seen along `wo`,
+    /// of a diffuse material of reflectance `albedo`, as
     /// `camera_scatter` takes it, in three parts: the light sample (s = 1)
     /// staged in `diffuse` with its place taken in `connections`, or made
     /// at once for a light other than an emissive triangle; the
@@ -50,12 +50,17 @@ impl Bidirectional {
         at: CameraVertex,
         walk: &Walk,
         sampler: &mut Sampler,
-        (surface, wo, material): (&SurfacePoint, Vec3, u32),
+        (surface, wo): (&SurfacePoint, Vec3),
         albedo: &Albedo,
         (connections, diffuse, pairs): (&mut Shares, &mut DiffuseCameraLanes, &mut ConnectionLanes),
     ) {
         let scene = at.scene;
-        let bsdf = scene.materials[material as usize].bsdf(surface, wo);
+        // The BSDF itself only for the scalar code (lights other than
+        // emissive triangles, light vertices of other materials): the
+        // passes read its reflectance and normals.
+        let albedo = albedo.at(surface);
+        let (shading, facing, _) = facing_normals(surface, wo);
+        let bsdf = || Bsdf::lambertian_with(albedo, shading, facing);
         let numbers = sampler.vertex_numbers(true);
         let (u_select, u_point) = numbers.light.expect("diffuse vertices sample lights");
         let chosen = scene.light_selector.sample(u_select);
@@ -71,7 +76,7 @@ impl Bidirectional {
             }
             None => {
                 let (l, weight, ray) =
-                    light_sample(scene, surface, &bsdf, wo, walk, u_select, u_point);
+                    light_sample(scene, surface, &bsdf(), wo, walk, u_select, u_point);
                 connections.push((lane, ray, Share::light_sample(walk, l, weight)));
             }
         }
@@ -79,14 +84,12 @@ impl Bidirectional {
         self.connect_diffuse(
             lane,
             walk,
-            surface,
-            &bsdf,
+            (surface, (albedo, shading, facing), bsdf),
             wo,
             light_vertices,
             connections,
             pairs,
         );
-        let albedo = albedo.at(surface);
         diffuse.stage(
             lane,
             surface,

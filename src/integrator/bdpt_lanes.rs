@@ -326,7 +326,7 @@ impl Bidirectional {
                         at,
                         walk,
                         sampler,
-                        (&surface, wo, material),
+                        (&surface, wo),
                         albedo,
                         (connections, diffuse, pairs),
                     ),

@@ -202,21 +202,7 @@ impl Material {
     // Inlined: see `Light::sample_incident`.
     #[inline(always)]
     pub fn bsdf(&self, surface: &SurfacePoint, wo: Vec3) -> Bsdf {
-        let outside = wo.dot(surface.geometric_normal) >= 0.0;
-        let ng = if outside {
-            surface.geometric_normal
-        } else {
-            -surface.geometric_normal
-        };
-        let mut ns = if outside {
-            surface.shading_normal
-        } else {
-            -surface.shading_normal
-        };
-        // An interpolated normal can tilt past `wo`; the geometric one never does.
-        if ns.dot(wo) <= 0.0 {
-            ns = ng;
-        }
+        let (ns, ng, outside) = facing_normals(surface, wo);
         let kind = match self {
             Material::Diffuse { albedo } => BsdfKind::Diffuse {
                 albedo: albedo.at(surface),
@@ -282,7 +268,42 @@ impl Material {
     }
 }
 
+/// The shading and geometric normals a BSDF at `surface` seen from `wo`
+/// takes (see `Material::bsdf`), both on the side of `wo`, and whether
+/// `wo` is on the geometric normal's side.
+#[inline(always)]
+pub fn facing_normals(surface: &SurfacePoint, wo: Vec3) -> (Vec3, Vec3, bool) {
+    let outside = wo.dot(surface.geometric_normal) >= 0.0;
+    let ng = if outside {
+        surface.geometric_normal
+    } else {
+        -surface.geometric_normal
+    };
+    let mut ns = if outside {
+        surface.shading_normal
+    } else {
+        -surface.shading_normal
+    };
+    // An interpolated normal can tilt past `wo`; the geometric one never does.
+    if ns.dot(wo) <= 0.0 {
+        ns = ng;
+    }
+    (ns, ng, outside)
+}
+
 impl Bsdf {
+    /// The Lambertian BSDF of reflectance `albedo` with the shading and
+    /// geometric normals `ns` and `ng` from [`facing_normals`]: what
+    /// `Material::bsdf` makes of a diffuse material of that reflectance.
+    #[inline(always)]
+    pub fn lambertian_with(albedo: Rgb, ns: Vec3, ng: Vec3) -> Bsdf {
+        Bsdf {
+            kind: BsdfKind::Diffuse { albedo },
+            frame: Frame::new(ns),
+            ng,
+        }
+    }
+
     /// Whether the BSDF has only delta lobes, so `eval` and `pdf` are always zero.
     pub fn is_delta(&self) -> bool {
         match self.kind {
