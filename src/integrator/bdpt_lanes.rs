@@ -41,7 +41,7 @@ use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::light::Light;
-use crate::material::Material;
+use crate::material::{facing_normals, Bsdf, Material};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -191,9 +191,11 @@ impl Bidirectional {
                     Material::Diffuse { albedo } if walk.weighted => {
                         let numbers =
                             light_goes_on(walk, max_depth).then(|| sampler.walk_numbers());
-                        let bsdf = material.bsdf(&surface, wo);
-                        vertices.push(LightVertex::new(surface, bsdf, wo, walk));
+                        // `material.bsdf`, its reflectance looked up once.
                         let albedo = albedo.at(&surface);
+                        let (shading, facing, _) = facing_normals(&surface, wo);
+                        let bsdf = Bsdf::lambertian_with(albedo, shading, facing);
+                        vertices.push(LightVertex::new(surface, bsdf, wo, walk));
                         diffuse.stage(k, &surface, wo, albedo, walk, lens[k], numbers);
                     }
                     _ => {
