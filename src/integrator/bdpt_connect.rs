@@ -166,7 +166,8 @@ const NOT_LAMBERTIAN: u32 = u32::MAX;
 impl ConnectionLanes {
     /// Packs the light vertices of lanes `0..lanes` (`vertices(k)` for
     /// lane k) as ends, for camera walks of merging constant `vm`: once
-    /// per sample, where each is connected to every camera vertex.
+    /// per batch of samples, where a light vertex may end a pair at each
+    /// vertex of its sample's camera walk.
     pub fn begin<'a>(
         &mut self,
         lanes: usize,
@@ -226,9 +227,9 @@ impl ConnectionLanes {
             }
         }
     }
-}
 
-impl ConnectionLanes {
+    /// Stages a pair: the camera end `camera`, the light end
+    /// `lights[light_index]`, and its place `slot` in the step's shares.
     #[inline(always)]
     fn stage(&mut self, camera: &End, light_index: u32, slot: usize) {
         let pair = self.slots.len();

@@ -553,3 +553,50 @@ pub(crate) fn refract(w: Vec3, n: Vec3, cos: f32, eta: f32) -> Vec3 {
 pub(crate) fn safe_sqrt(x: f32) -> f32 {
     x.max(0.0).sqrt()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec2;
+
+    #[test]
+    fn a_lambertian_bsdf_from_its_parts_is_the_materials() {
+        let material = Material::Diffuse {
+            albedo: Albedo::Constant(Rgb::new(0.7, 0.4, 0.2)),
+        };
+        let ng = Vec3::Z;
+        // Shading normals flat, tilted, and tilted past some of the `wo`.
+        let shading = [
+            ng,
+            Vec3::new(0.3, 0.0, 1.0).normalize(),
+            Vec3::new(0.0, -0.9, 0.2).normalize(),
+        ];
+        for ns in shading {
+            let surface = SurfacePoint {
+                position: Vec3::new(1.0, 2.0, 3.0),
+                geometric_normal: ng,
+                shading_normal: ns,
+                uv: Vec2::ZERO,
+                magnitude: 3.0,
+            };
+            for wo in [
+                Vec3::new(0.2, 0.1, 0.97),
+                Vec3::new(-0.5, 0.6, -0.62),
+                Vec3::new(0.0, 0.995, 0.1),
+            ] {
+                let wo = wo.normalize();
+                let whole = material.bsdf(&surface, wo);
+                let (albedo, lobe_ns, lobe_ng) = whole.lambertian().expect("diffuse");
+                let (ns, ng, _) = facing_normals(&surface, wo);
+                assert_eq!((lobe_ns, lobe_ng), (ns, ng));
+                let parts = Bsdf::lambertian_with(albedo, ns, ng);
+                // Debug prints each float exactly (shortest round trip).
+                assert_eq!(
+                    format!("{whole:?}"),
+                    format!("{parts:?}"),
+                    "ns {ns}, wo {wo}"
+                );
+            }
+        }
+    }
+}
