@@ -248,11 +248,7 @@ impl Material {
                 tables: *tables,
             }),
         };
-        Bsdf {
-            kind,
-            frame: Frame::new(ns),
-            ng,
-        }
+        Bsdf::oriented(kind, ns, ng)
     }
 
     /// Whether the material scatters only into delta lobes (mirror or glass),
@@ -297,8 +293,15 @@ impl Bsdf {
     /// `Material::bsdf` makes of a diffuse material of that reflectance.
     #[inline(always)]
     pub fn lambertian_with(albedo: Rgb, ns: Vec3, ng: Vec3) -> Bsdf {
+        Bsdf::oriented(BsdfKind::Diffuse { albedo }, ns, ng)
+    }
+
+    /// The lobe `kind` with the shading and geometric normals `ns` and
+    /// `ng` from [`facing_normals`].
+    #[inline(always)]
+    fn oriented(kind: BsdfKind, ns: Vec3, ng: Vec3) -> Bsdf {
         Bsdf {
-            kind: BsdfKind::Diffuse { albedo },
+            kind,
             frame: Frame::new(ns),
             ng,
         }
