@@ -415,15 +415,27 @@ class Mitsuba:
 # ------------------------------------------------------------------- main
 
 def machine():
+    """The CPU as `lscpu` names it, with its family, model and widest vector
+    instructions: cloud CPUs often report only a brand ("AMD EPYC"), and
+    tracer's speed (its native build) and Mitsuba's (its LLVM kernels) both
+    depend on whether AVX-512 is there."""
     model = platform.processor() or platform.machine()
+    details = []
     try:
         out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-        m = re.search(r"Model name:\s*(.+)", out)
-        if m:
-            model = m.group(1).strip()
+        field = lambda name: (re.search(rf"^{name}:\s*(.+)$", out, re.M) or [None, None])[1]
+        model = (field("Model name") or model).strip()
+        if field("CPU family") and field("Model"):
+            details.append(f"family {field('CPU family').strip()}, model {field('Model').strip()}")
+        flags = set((field("Flags") or "").split())
+        if "avx512f" in flags:
+            details.append("AVX-512")
+        elif "avx2" in flags:
+            details.append("AVX2")
     except OSError:
         pass
-    return {"cpu": model, "cores": os.cpu_count(), "system": platform.platform()}
+    cpu = f"{model} ({', '.join(details)})" if details else model
+    return {"cpu": cpu, "cores": os.cpu_count(), "system": platform.platform()}
 
 
 def git(*args):
@@ -683,7 +695,7 @@ def readme_table(meta, results):
     lines = [README_BEGIN, "",
              f"Rendering against Mitsuba {meta['mitsuba']} (`{meta['variant']}`, Dr.Jit "
              f"{meta['drjit']}) in the same run: {meta['threads']} threads, "
-             f"{meta['date'][:10]}, {m['cpu']} ({m['cores']} cores), tracer at git {meta['git']}, "
+             f"{meta['date'][:10]}, {m['cpu']}, {m['cores']} cores, tracer at git {meta['git']}, "
              f"`{meta['command']}`. Efficiency is 1 / (relative MSE x seconds) at equal samples "
              f"per pixel, against Mitsuba's most efficient sampler for the scene. Mitsuba has "
              f"no bidirectional path tracer: tracer's `bdpt` is set against its `path`.", "",

@@ -46,13 +46,14 @@ import datetime
 import importlib.metadata
 import json
 import os
-import platform
 import statistics
 import subprocess
 import sys
 import time
 
 import numpy as np
+
+import compare  # this folder's peer harness: its description of the machine
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SETS = ("primary", "diffuse", "incoherent", "shadow")
@@ -302,7 +303,7 @@ def main(argv=None):
     os.makedirs(args.out, exist_ok=True)
     report = {
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} CPUs",
+        "machine": f"{compare.machine()['cpu']}, {os.cpu_count()} CPUs",
         "embreex": importlib.metadata.version("embreex"),
         "tracer": subprocess.run([args.tracer, "--version"], capture_output=True, text=True).stdout.strip(),
         "inputs": [],
