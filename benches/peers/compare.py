@@ -771,7 +771,9 @@ def readme_table(meta, results):
         c = a.get("calibrated", "absent")
         if control and not control["pass"] and c != "absent":
             if c is None:
-                text += ", and fails on every block size up to 32x32, so the test says nothing there"
+                last = CALIBRATION_BLOCKS[-1]
+                text += (f", and fails on every block size up to {last}x{last}, so the test "
+                         f"says nothing there")
             else:
                 b = c["block_size"]
                 text += (f"; on {b}x{b} blocks, where the control passes, Mitsuba "
