@@ -20,6 +20,7 @@ use super::simd::{
 };
 use super::walk::{MergeWeights, Walk};
 use super::LIGHT_ROULETTE_START;
+use crate::bvh::LANES;
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::{Ray, SurfacePoint};
@@ -273,8 +274,8 @@ impl DiffuseLightLanes {
 
 /// The light walks' starts on emissive triangles, made eight lanes at a
 /// time (`start_light_walk` with `AreaLight::sample_emission`): each lane
-/// stages its light, chosen with its numbers drawn, and one pass per half
-/// of the lanes samples the point and direction and begins the walk.
+/// stages its light, chosen with its numbers drawn, and one pass per eight
+/// lanes samples the point and direction and begins the walk.
 #[derive(Default)]
 pub(super) struct LightStarts {
     lights: StagedLights,
@@ -326,9 +327,9 @@ impl LightStarts {
         self.vc[lane] = merging.vc;
     }
 
-    /// Starts every staged lane.
+    /// Starts every staged lane, eight at a time.
     pub fn start(&mut self) {
-        for base in [0, 8] {
+        for base in (0..LANES).step_by(8) {
             if (self.lights.lit >> base) & 0xff != 0 {
                 self.start_half(base);
             }
@@ -386,5 +387,45 @@ impl LightStarts {
         store(mis(direct_pdf / emission_pdf), &mut out.d_vcm, base);
         store(d_vc, &mut out.d_vc, base);
         store(d_vc * load(&self.vc, base), &mut out.d_vm, base);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Triangle;
+
+    /// Every lane a batch stages is started, whatever the lane count: each
+    /// lane's walk leaves along the light's own scalar emission sample.
+    #[test]
+    fn every_staged_lane_starts_as_its_scalar_emission_sample() {
+        let triangle = Triangle::new(
+            Vec3::new(-1.0, 3.0, 0.5),
+            Vec3::new(2.0, 3.5, -0.25),
+            Vec3::new(0.5, 2.0, 1.5),
+        );
+        let light = AreaLight::new(triangle, 0, Vec3::new(4.0, 2.5, 1.0), true);
+        let number = |k: usize, d: usize| ((k * 7 + d * 3) % 29) as f32 / 29.0 + 0.01;
+        let mut starts = LightStarts::default();
+        starts.clear();
+        for k in 0..LANES {
+            let u = ((number(k, 0), number(k, 1)), (number(k, 2), number(k, 3)));
+            starts.stage(k, &light, 0.5, u, MergeWeights::NONE);
+        }
+        starts.start();
+        let mut started = 0;
+        for k in 0..LANES {
+            let scalar =
+                light.sample_emission((number(k, 0), number(k, 1)), (number(k, 2), number(k, 3)));
+            let walk = starts.walk(k, MergeWeights::NONE);
+            assert_eq!(walk.is_some(), scalar.is_some(), "lane {k}");
+            if let (Some(walk), Some(scalar)) = (walk, scalar) {
+                // The walk leaves from just off the light (its ray offset).
+                assert!(walk.origin.distance(scalar.origin) < 1e-3, "lane {k}");
+                assert_eq!(walk.dir, scalar.dir, "lane {k}");
+                started += 1;
+            }
+        }
+        assert!(started > LANES / 2, "only {started} of {LANES} lanes emit");
     }
 }
