@@ -15,12 +15,11 @@
 
 use super::bdpt_diffuse::{FollowedWalks, StagedWalks};
 use super::simd::{
-    diffuse_eval, get3, lane_mask, load, load3, offset_origin, set3, set_bits, shading_correction,
-    store, store3, Lanes, Lanes3, StagedLights, StagedVertices, V3,
+    diffuse_eval, eights_with, get3, lane_mask, load, load3, offset_origin, set3, set_bits,
+    shading_correction, store, store3, Lanes, Lanes3, StagedLights, StagedVertices, V3,
 };
 use super::walk::{MergeWeights, Walk};
 use super::LIGHT_ROULETTE_START;
-use crate::bvh::LANES;
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::{Ray, SurfacePoint};
@@ -329,10 +328,8 @@ impl LightStarts {
 
     /// Starts every staged lane, eight at a time.
     pub fn start(&mut self) {
-        for base in (0..LANES).step_by(8) {
-            if (self.lights.lit >> base) & 0xff != 0 {
-                self.start_half(base);
-            }
+        for base in eights_with(self.lights.lit) {
+            self.start_eight(base);
         }
     }
 
@@ -358,7 +355,7 @@ impl LightStarts {
     }
 
     /// The SIMD pass over lanes `base .. base + 8`.
-    fn start_half(&mut self, base: usize) {
+    fn start_eight(&mut self, base: usize) {
         let (zero, one) = (f32x8::ZERO, f32x8::ONE);
         let mis = |x: f32x8| x * x;
         let (u, v) = (
@@ -393,6 +390,7 @@ impl LightStarts {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bvh::LANES;
     use crate::geometry::Triangle;
 
     /// Every lane a batch stages is started, whatever the lane count: each

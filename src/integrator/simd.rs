@@ -316,12 +316,9 @@ impl StagedVertices {
         get3(&self.position, lane)
     }
 
-    /// The first lane of each half of the lanes that has staged lanes.
+    /// The first lane of each eight that has staged lanes.
     pub fn halves(&self) -> impl Iterator<Item = usize> + use<> {
-        let staged = self.staged;
-        (0..LANES / 8)
-            .map(|half| 8 * half)
-            .filter(move |base| (staged >> base) & 0xff != 0)
+        eights_with(self.staged)
     }
 
     /// Lanes `base .. base + 8`, oriented and sampled.
@@ -639,6 +636,14 @@ pub(super) fn follow_weights(
         scale * (d_vc * reverse + d_vcm + vm),
         scale * (d_vm * reverse + d_vcm * vc + one),
     )
+}
+
+/// The first lane of each run of eight lanes (`base`, for the eight-lane
+/// passes) with a bit set in `mask`, up to `LANES`.
+pub(super) fn eights_with(mask: u32) -> impl Iterator<Item = usize> {
+    (0..LANES)
+        .step_by(8)
+        .filter(move |base| (mask >> base) & 0xff != 0)
 }
 
 /// Lanes `base .. base + 8` of `a`.
